@@ -1,0 +1,105 @@
+"""M-bit DFT codebook, beam selection and the two-way beam gain ϖ (paper §III, §II-C).
+
+w_i = a(ϑ_i)/√N with ϑ_i = i/2^M. The paper keeps i = −23…23 (47 beams, ±45.95°
+for M = 6, N = 8) and rotates the terminal to 4 orientations k·π/2: 188 beams.
+
+The two-way gain of beam i towards a path at angle θ (eq. (4)) is
+ϖ_i(θ) = w_i^H a_R(θ) a_T^H(θ) w_i = |w_i^H a(θ)|² for the identical TX and RX
+arrays, sidelobes included; its peak is N. An element pattern cos^q(θ) (power,
+each way) bounds the arrays to the half space in front of them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from radioslam.antenna.array import array_response, spatial_frequency, steering_vector
+from radioslam.config import RadioConfig
+
+
+def dft_codebook(n_elements: int, bits: int, indices: np.ndarray) -> np.ndarray:
+    """Weights w_i = a(i/2^M)/√N, shape (len(indices), N)."""
+    return steering_vector(np.asarray(indices) / 2**bits, n_elements) / np.sqrt(n_elements)
+
+
+def beam_angle(indices: np.ndarray, bits: int) -> np.ndarray:
+    """Physical angle arcsin(2·ϑ_i) of codebook entry i (d = λ/2), radians."""
+    return np.arcsin(2.0 * np.asarray(indices) / 2**bits)
+
+
+@dataclass(frozen=True)
+class BeamSet:
+    """The swept beams of one pose: every (orientation, codebook index) pair, flattened.
+
+    Beam order: orientation-major, then codebook index ascending, 188 by default.
+    """
+
+    n_elements: int
+    bits: int
+    beams_per_side: int
+    orientations: int
+    element_exponent: float = 1.0
+
+    @classmethod
+    def from_config(cls, radio: RadioConfig) -> "BeamSet":
+        return cls(radio.array_elements, radio.codebook_bits, radio.beams_per_side,
+                   radio.orientations, radio.element_exponent)
+
+    @property
+    def codebook_indices(self) -> np.ndarray:
+        return np.arange(-self.beams_per_side, self.beams_per_side + 1)
+
+    @property
+    def per_orientation(self) -> int:
+        return len(self.codebook_indices)
+
+    def __len__(self) -> int:
+        return self.per_orientation * self.orientations
+
+    @property
+    def orientation(self) -> np.ndarray:
+        """Orientation k of each beam."""
+        return np.repeat(np.arange(self.orientations), self.per_orientation)
+
+    @property
+    def index(self) -> np.ndarray:
+        """Codebook index i of each beam."""
+        return np.tile(self.codebook_indices, self.orientations)
+
+    @property
+    def slot(self) -> np.ndarray:
+        """Position 0 … 46 of each beam within its orientation's sweep (its SSB index)."""
+        return np.tile(np.arange(self.per_orientation), self.orientations)
+
+    @property
+    def orientation_angle(self) -> np.ndarray:
+        """Array normal of each beam in the terminal frame: k·2π/orientations."""
+        return self.orientation * (2 * np.pi / self.orientations)
+
+    @property
+    def angle(self) -> np.ndarray:
+        """Beam pointing angle in the terminal frame, radians in (−π, π]."""
+        raw = self.orientation_angle + beam_angle(self.index, self.bits)
+        return np.angle(np.exp(1j * raw))
+
+    def weights(self) -> np.ndarray:
+        return dft_codebook(self.n_elements, self.bits, self.index)
+
+    def two_way_gain(self, theta_terminal: np.ndarray) -> np.ndarray:
+        """Amplitude gain (B, P) of every beam towards paths at terminal-frame angles (P,).
+
+        ϖ_i(θ − k·π/2) times the element pattern cos^q each way; zero behind the array.
+        """
+        local = np.asarray(theta_terminal)[None, :] - self.orientation_angle[:, None]
+        local = np.angle(np.exp(1j * local))
+        front = np.abs(local) < np.pi / 2
+        cos_l = np.where(front, np.cos(local), 0.0)
+        out = np.empty(local.shape)
+        w = self.weights()
+        for k in range(self.orientations):  # 4 orientations; beams and paths stay vectorized
+            rows = self.orientation == k
+            af = array_response(w[rows], spatial_frequency(local[rows][0]))
+            out[rows] = np.abs(af) ** 2
+        return out * cos_l**self.element_exponent

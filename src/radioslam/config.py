@@ -1,0 +1,86 @@
+"""Radio configuration: the prototype's defaults (paper Table II, §II-D; DESIGN.md §3).
+
+A scene file's optional ``radio:`` block overrides any of these fields. The model
+is frozen and rejects unknown keys, so a typo in a scene file is an error, not a
+silently ignored setting.
+"""
+
+from __future__ import annotations
+
+from enum import Enum
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+SPEED_OF_LIGHT = 299_792_458.0  # m/s
+
+
+class PssKind(str, Enum):
+    """Which PSS sequence the SSB carries."""
+
+    M_SEQUENCE = "m-sequence"  # 3GPP TS 38.211 §7.4.2.2
+    ZADOFF_CHU = "zadoff-chu"  # the paper's wording (§III-A)
+
+
+class DataMode(str, Enum):
+    """Sensing payload across the R symbols of one beam (paper §III-B, Fig. 5)."""
+
+    DIFFERENT = "different"  # independent 16-QAM per symbol
+    IDENTICAL = "identical"  # the same 16-QAM symbol repeated R times
+
+
+class RadioConfig(BaseModel):
+    """Every radio parameter of the simulated prototype, in SI units."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    carrier_hz: float = Field(28e9, gt=0)
+    fft_size: int = Field(1024, ge=128)
+    n_subcarriers: int = Field(792, ge=12)
+    subcarrier_spacing_hz: float = Field(120e3, gt=0)
+    array_elements: int = Field(8, ge=2)
+    codebook_bits: int = Field(6, ge=2, le=10)
+    beams_per_side: int = Field(23, ge=0)  # i = -23..23: 47 beams, ±45.95°
+    orientations: int = Field(4, ge=1, le=8)
+    symbols_per_frame: int = Field(6, ge=1)  # sensing symbols per beam per frame
+    frames: int = Field(2, ge=1)  # R = symbols_per_frame * frames = 12
+    pss: PssKind = PssKind.M_SEQUENCE
+    n_id2: int = Field(0, ge=0, le=2)
+    data: DataMode = DataMode.DIFFERENT
+    snr_db: float = 10.0  # ★ per-RE SNR of the reference echo (DESIGN.md §2)
+    hardware_delay_s: float = Field(32e-6, ge=0, le=1e-3)
+    isolation_db: float = 45.0  # TX→RX beam-space isolation of the full-duplex leakage
+    array_baseline_m: float = Field(0.05, ge=0, le=1.0)  # TX/RX array centre spacing
+    element_exponent: float = Field(1.0, ge=0)  # element power pattern cos^q(θ)
+    ray_spacing_deg: float = Field(0.25, gt=0, le=2.0)
+    max_range_m: float = Field(40.0, gt=0)
+    max_hits: int = Field(3, ge=1, le=8)  # ray continues through transmissive walls
+    calibration_targets: int = Field(16, ge=1)
+    calibration_spacing_m: float = Field(0.8, gt=0)
+    point_threshold_db: float = Field(-13.0, le=0)
+
+    @model_validator(mode="after")
+    def _check(self) -> "RadioConfig":
+        if self.n_subcarriers > self.fft_size:
+            raise ValueError("n_subcarriers must not exceed fft_size")
+        if self.n_subcarriers % 12:
+            raise ValueError("n_subcarriers must be a whole number of resource blocks (12)")
+        if self.beams_per_side >= 2 ** (self.codebook_bits - 1):
+            raise ValueError("beams_per_side must stay below 2^(codebook_bits-1) (|sin θ| < 1)")
+        return self
+
+    @property
+    def sample_rate_hz(self) -> float:
+        return self.fft_size * self.subcarrier_spacing_hz
+
+    @property
+    def wavelength_m(self) -> float:
+        return SPEED_OF_LIGHT / self.carrier_hz
+
+    @property
+    def symbols_per_beam(self) -> int:
+        """R, the number of sensing symbols per beam (12 by default)."""
+        return self.symbols_per_frame * self.frames
+
+    @property
+    def beams_per_orientation(self) -> int:
+        return 2 * self.beams_per_side + 1

@@ -1,0 +1,34 @@
+"""16-QAM with the Gray mapping of 3GPP TS 38.211 §5.1.4 (unit average energy)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+BITS_PER_SYMBOL = 4
+_SCALE = 1.0 / np.sqrt(10.0)
+
+
+def qam16_modulate(bits: np.ndarray) -> np.ndarray:
+    """Map bits (..., 4k) of 0/1 to 16-QAM symbols (..., k).
+
+    d = [(1−2b0)(2−(1−2b2)) + j(1−2b1)(2−(1−2b3))] / √10, 38.211 §5.1.4.
+    """
+    b = np.asarray(bits, dtype=np.int8)
+    if b.shape[-1] % BITS_PER_SYMBOL:
+        raise ValueError("the bit count must be a multiple of 4")
+    b = b.reshape(*b.shape[:-1], -1, BITS_PER_SYMBOL)
+    s = 1 - 2 * b.astype(np.float64)
+    return ((s[..., 0] * (2 - s[..., 2])) + 1j * (s[..., 1] * (2 - s[..., 3]))) * _SCALE
+
+
+def qam16_demodulate(symbols: np.ndarray) -> np.ndarray:
+    """Hard decision, the inverse of :func:`qam16_modulate`: symbols (..., k) → bits (..., 4k)."""
+    z = np.asarray(symbols) / _SCALE
+    re, im = z.real, z.imag
+    bits = np.stack([re < 0, im < 0, np.abs(re) > 2, np.abs(im) > 2], axis=-1)
+    return bits.reshape(*z.shape[:-1], -1).astype(np.uint8)
+
+
+def random_bits(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
+    """Uniform random bits from the caller's generator."""
+    return rng.integers(0, 2, size=shape, dtype=np.uint8)

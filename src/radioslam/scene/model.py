@@ -1,0 +1,80 @@
+"""The runtime scene: wall segments as arrays, their materials, the poses and the radio."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from radioslam.config import RadioConfig
+from radioslam.scene.errors import SceneError
+from radioslam.scene.geometry import point_segment_distance
+from radioslam.scene.materials import BUILTIN_MATERIALS, Material
+from radioslam.scene.schema import SceneSpec
+from radioslam.scene.trajectory import trajectory_poses
+
+MIN_WALL_CLEARANCE_M = 0.2
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene. ``spec`` keeps the file form for writing ``scene.yaml``."""
+
+    spec: SceneSpec
+    segments: np.ndarray  # (S, 2, 2)
+    segment_wall: np.ndarray  # (S,) index of the polyline in spec.walls
+    segment_material: np.ndarray  # (S,) index into materials
+    materials: tuple[Material, ...]
+    material_names: tuple[str, ...]
+    poses: np.ndarray  # (P, 3)
+
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
+    def radio(self) -> RadioConfig:
+        return self.spec.radio
+
+    def material_array(self, attribute: str) -> np.ndarray:
+        """Per-segment values of a material attribute, e.g. ``transmission``."""
+        values = np.array([getattr(m, attribute) for m in self.materials])
+        return values[self.segment_material]
+
+    def with_radio(self, **overrides: object) -> "Scene":
+        """The same scene with radio fields replaced (``None`` values are ignored)."""
+        changes = {k: v for k, v in overrides.items() if v is not None}
+        radio = RadioConfig(**{**self.radio.model_dump(), **changes})
+        return build_scene(self.spec.model_copy(update={"radio": radio}))
+
+
+def build_scene(spec: SceneSpec, source: str | None = None) -> Scene:
+    """Turn a schema-valid spec into arrays, checking materials, segments and clearances."""
+    materials = dict(BUILTIN_MATERIALS)
+    materials.update({name: Material(**m.model_dump()) for name, m in spec.materials.items()})
+    names = tuple(materials)
+    segments, wall_of, material_of = [], [], []
+    for w, wall in enumerate(spec.walls):
+        if wall.material not in materials:
+            raise SceneError(f"unknown material '{wall.material}' (known: {', '.join(names)})",
+                             file=source, field=f"walls[{w}].material")
+        pts = np.asarray(wall.points, dtype=np.float64)
+        if np.any(np.linalg.norm(np.diff(pts, axis=0), axis=1) < 1e-9):
+            raise SceneError("two consecutive points coincide (zero-length segment)",
+                             file=source, field=f"walls[{w}].points")
+        segments.append(np.stack([pts[:-1], pts[1:]], axis=1))
+        wall_of += [w] * (len(pts) - 1)
+        material_of += [names.index(wall.material)] * (len(pts) - 1)
+    seg = np.concatenate(segments)
+    poses = trajectory_poses(spec.trajectory)
+    dist = point_segment_distance(poses[:, :2], seg)
+    near = np.argwhere(dist < MIN_WALL_CLEARANCE_M)
+    if len(near):
+        p, s = near[0]
+        where = "trajectory.poses" if spec.trajectory.poses is not None else "trajectory.circle"
+        raise SceneError(
+            f"pose {p} at ({poses[p, 0]:.3f}, {poses[p, 1]:.3f}) is {dist[p, s]:.3f} m from "
+            f"walls[{wall_of[s]}], closer than {MIN_WALL_CLEARANCE_M} m",
+            file=source, field=f"{where}[{p}]" if spec.trajectory.poses is not None else where)
+    return Scene(spec, seg, np.array(wall_of), np.array(material_of),
+                 tuple(materials[n] for n in names), names, poses)

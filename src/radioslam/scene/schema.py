@@ -1,0 +1,79 @@
+"""The scene file schema ★ (DESIGN.md §4, version 1), as pydantic models.
+
+Unknown keys are rejected everywhere; the optional ``radio:`` block is a
+:class:`~radioslam.config.RadioConfig`.
+"""
+
+from __future__ import annotations
+
+from enum import Enum
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from radioslam.config import RadioConfig
+
+Point = tuple[float, float]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class MaterialSpec(_Strict):
+    reflectivity: float = Field(ge=0.0, le=1.0)
+    scattering: float = Field(ge=0.0, le=1.0)
+    directivity: float = Field(ge=0.0, le=100.0)
+    transmission: float = Field(0.0, ge=0.0, le=1.0)
+
+    @model_validator(mode="after")
+    def _energy(self) -> "MaterialSpec":
+        if self.reflectivity**2 + self.transmission**2 > 1.0 + 1e-12:
+            raise ValueError("reflectivity² + transmission² exceeds 1 (creates energy)")
+        return self
+
+
+class WallSpec(_Strict):
+    points: list[Point]
+    material: str
+
+    @field_validator("points")
+    @classmethod
+    def _two_points(cls, v: list[Point]) -> list[Point]:
+        if len(v) < 2:
+            raise ValueError(f"a polyline needs at least 2 points, got {len(v)}")
+        return v
+
+
+class Heading(str, Enum):
+    TANGENT = "tangent"
+    FIXED = "fixed"
+
+
+class CircleSpec(_Strict):
+    center: Point
+    radius: float = Field(gt=0.0)
+    poses: int = Field(ge=1, le=100_000)
+    heading: Heading = Heading.TANGENT
+
+
+class TrajectorySpec(_Strict):
+    circle: CircleSpec | None = None
+    poses: list[tuple[float, float, float]] | None = None
+
+    @model_validator(mode="after")
+    def _exactly_one(self) -> "TrajectorySpec":
+        if (self.circle is None) == (self.poses is None):
+            raise ValueError("give exactly one of 'circle' or 'poses'")
+        if self.poses is not None and not self.poses:
+            raise ValueError("'poses' is empty")
+        return self
+
+
+class SceneSpec(_Strict):
+    version: Literal[1]
+    name: str = Field(min_length=1)
+    materials: dict[str, MaterialSpec] = Field(default_factory=dict)
+    walls: list[WallSpec] = Field(min_length=1)
+    trajectory: TrajectorySpec
+    radio: RadioConfig = Field(default_factory=RadioConfig)
