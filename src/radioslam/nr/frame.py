@@ -92,8 +92,8 @@ class FrameSchedule:
         orientation, beam = np.broadcast_arrays(np.asarray(orientation), np.asarray(beam))
         reserved = self.reserved_symbols()
         within = reserved[beam[..., None] * self.symbols_per_frame + np.arange(self.symbols_per_frame)]
-        frame = orientation[..., None] * self.frames + np.arange(self.frames)[:, None]  # (..., F, 1)
-        symbols = frame * self.symbols_per_frame_total + within[..., None, :]
+        frame = orientation[..., None, None] * self.frames + np.arange(self.frames)[:, None]  # (..., F, 1)
+        symbols = frame * self.symbols_per_frame_total + within[..., None, :]  # (..., F, S)
         return symbols.reshape(*beam.shape, self.repetitions)
 
     def window_symbols(self, orientation: np.ndarray | int, beam: np.ndarray | int) -> np.ndarray:

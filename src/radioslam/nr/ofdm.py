@@ -33,10 +33,12 @@ def symbol_starts(cp_lengths: np.ndarray, fft_size: int) -> np.ndarray:
     return np.concatenate([[0], np.cumsum(lengths)[:-1]])
 
 
-def to_fft_bins(grid: np.ndarray, numerology: Numerology) -> np.ndarray:
-    """Place active-subcarrier values (..., n_sc) into FFT bins (..., N)."""
-    bins = np.zeros((*grid.shape[:-1], numerology.fft_size), dtype=np.complex128)
-    bins[..., numerology.fft_bins()] = grid
+def to_fft_bins(grid: np.ndarray, numerology: Numerology, dtype=np.complex128) -> np.ndarray:
+    """Place active-subcarrier values (..., n_sc) into FFT bins (..., N), DC-centred."""
+    bins = np.zeros((*grid.shape[:-1], numerology.fft_size), dtype=dtype)
+    negative = numerology.n_subcarriers // 2
+    bins[..., numerology.fft_size - negative:] = grid[..., :negative]
+    bins[..., :numerology.n_subcarriers - negative] = grid[..., negative:]
     return bins
 
 

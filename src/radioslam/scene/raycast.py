@@ -43,7 +43,8 @@ def cast_rays(origin: np.ndarray, angles: np.ndarray, segments: np.ndarray,
     seg = np.where(np.isfinite(dist), order, -1)
     # a ray through a shared polyline vertex meets both segments at the same distance
     repeat = np.zeros_like(dist, dtype=bool)
-    repeat[:, 1:] = np.abs(np.diff(dist, axis=1)) < 1e-9
+    with np.errstate(invalid="ignore"):  # inf − inf where a ray has fewer hits
+        repeat[:, 1:] = np.abs(np.diff(dist, axis=1)) < 1e-9
     t_two_way = np.where(seg >= 0, segment_transmission[np.maximum(seg, 0)] ** 2, 0.0)
     before = np.ones_like(dist)
     before[:, 1:] = np.cumprod(t_two_way[:, :-1], axis=1)
