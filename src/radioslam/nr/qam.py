@@ -39,5 +39,7 @@ def qam16_demodulate(symbols: np.ndarray) -> np.ndarray:
 
 
 def random_bits(rng: np.random.Generator, shape: tuple[int, ...]) -> np.ndarray:
-    """Uniform random bits from the caller's generator."""
-    return rng.integers(0, 2, size=shape, dtype=np.uint8)
+    """Uniform random bits from the caller's generator (drawn as bytes, then unpacked)."""
+    count = int(np.prod(shape))
+    packed = rng.integers(0, 256, size=-(-count // 8), dtype=np.uint8)
+    return np.unpackbits(packed, count=count).reshape(shape)
