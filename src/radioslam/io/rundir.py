@@ -1,0 +1,41 @@
+"""The run directory ★ (DESIGN.md §5): file names every stage agrees on."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+
+@dataclass(frozen=True)
+class RunDir:
+    root: Path
+
+    @property
+    def scene(self) -> Path:
+        return self.root / "scene.yaml"
+
+    @property
+    def ground_truth(self) -> Path:
+        return self.root / "ground_truth.tum"
+
+    @property
+    def captures(self) -> Path:
+        return self.root / "captures"
+
+    def capture_base(self, pose_index: int) -> Path:
+        """``captures/NNNN`` (add ``.sigmf-meta`` / ``.sigmf-data``)."""
+        return self.captures / f"{pose_index:04d}"
+
+    @property
+    def calibration(self) -> Path:
+        return self.root / "calibration.json"
+
+    @property
+    def scans(self) -> Path:
+        return self.root / "scans"
+
+    def pose_timestamps(self, count: int):
+        """Poses are stamped 1 s apart, t = index."""
+        import numpy as np
+
+        return np.arange(count, dtype=np.float64)
