@@ -102,4 +102,4 @@ class BeamSet:
             rows = self.orientation == k
             af = array_response(w[rows], spatial_frequency(local[rows][0]))
             out[rows] = np.abs(af) ** 2
-        return out * cos_l**self.element_exponent
+        return np.where(front, out * cos_l**self.element_exponent, 0.0)

@@ -29,7 +29,7 @@ def ray_segment_intersections(origin: np.ndarray, directions: np.ndarray,
     a, e = segments[:, 0], segments[:, 1] - segments[:, 0]
     denom = cross2(directions[:, None, :], e[None])  # (R, S)
     rel = a - origin  # (S, 2)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         t = cross2(rel[None], e[None]) / denom
         u = cross2(rel[None], directions[:, None, :]) / denom
     hit = (np.abs(denom) > 1e-12) & (t > 1e-9) & (u >= 0.0) & (u <= 1.0)
