@@ -1,0 +1,83 @@
+"""The command line ★: outputs of simulate, and exit status 2 with one line on bad input."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from radioslam.io import read_capture, read_tum
+from radioslam.scene import load_scene
+
+
+def run(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "radioslam.cli", *args], capture_output=True, text=True,
+                          cwd=cwd, timeout=300)
+
+
+def test_scenes_lists_the_builtins():
+    out = run("scenes")
+    assert out.returncode == 0
+    for name in ("paper-cnv", "glass-door", "single-plate"):
+        assert name in out.stdout
+
+
+def test_simulate_writes_the_run_directory(tmp_path):
+    out = run("simulate", "single-plate:3.2", "--out", str(tmp_path / "run"), "--seed", "4", "--save-iq",
+              "--snr-db", "15")
+    assert out.returncode == 0, out.stderr
+    run_dir = tmp_path / "run"
+    scene = load_scene(run_dir / "scene.yaml")
+    assert scene.radio.snr_db == 15.0 and scene.radio.hardware_delay_s == 32e-6  # defaults filled in
+    t, poses = read_tum(run_dir / "ground_truth.tum")
+    assert np.allclose(poses, [[0, 0, 0]])
+    cap = read_capture(run_dir / "captures" / "0000.sigmf-meta")
+    assert cap.samples.shape[0] == 188
+    again = run("simulate", "single-plate:3.2", "--out", str(tmp_path / "run2"), "--seed", "4", "--save-iq",
+                "--snr-db", "15")
+    assert again.returncode == 0
+    assert (run_dir / "captures/0000.sigmf-data").read_bytes() == (tmp_path / "run2/captures/0000.sigmf-data").read_bytes()
+
+
+SCENE = """version: 1
+name: t
+walls:
+  - {points: [[-5, -5], [5, -5], [5, 5], [-5, 5], [-5, -5]], material: concrete}
+trajectory:
+  poses: [[0, 0, 0]]
+"""
+
+
+@pytest.mark.parametrize("text, fragment", [
+    (SCENE + "colour: red\n", "colour: unknown key"),
+    (SCENE.replace("walls:\n  - {points: [[-5, -5], [5, -5], [5, 5], [-5, 5], [-5, -5]], material: concrete}\n",
+                   ""), "walls: required key is missing"),
+    (SCENE.replace("[[-5, -5], [5, -5], [5, 5], [-5, 5], [-5, -5]]", "[[1, 1]]"),
+     "walls[0].points: a polyline needs at least 2 points"),
+    (SCENE.replace("concrete", "cheese"), "walls[0].material: unknown material 'cheese'"),
+    (SCENE.replace("[[0, 0, 0]]", "[[4.9, 0, 0]]"), "trajectory.poses[0]: pose 0 at (4.900, 0.000) is 0.100 m"),
+    ("walls: [{points: [[0, 0], [1, 0]]\n", "line 2: not valid YAML"),
+    ("\x00\x01binary", "not valid YAML"),
+])
+def test_bad_scene_exits_2_with_one_line(tmp_path, text, fragment):
+    path = tmp_path / "scene.yaml"
+    path.write_text(text)
+    out = run("simulate", str(path), "--out", str(tmp_path / "o"))
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in out.stderr
+    assert lines[0].startswith(f"radioslam: error: {path}: ") and fragment in lines[0]
+    assert not (tmp_path / "o" / "scene.yaml").exists()
+
+
+def test_missing_scene_file_exits_2(tmp_path):
+    out = run("simulate", str(tmp_path / "none.yaml"), "--out", str(tmp_path / "o"))
+    assert out.returncode == 2 and out.stderr.strip().endswith("(file): no such file")
+    assert len(out.stderr.strip().splitlines()) == 1
+
+
+def test_unwritable_output_exits_2(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    out = run("simulate", "single-plate", "--out", str(blocker / "sub"))
+    assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1
