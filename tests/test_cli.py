@@ -81,3 +81,20 @@ def test_unwritable_output_exits_2(tmp_path):
     blocker.write_text("")
     out = run("simulate", "single-plate", "--out", str(blocker / "sub"))
     assert out.returncode == 2 and len(out.stderr.strip().splitlines()) == 1
+
+
+def _readme_block(marker: str) -> str:
+    from pathlib import Path
+
+    text = (Path(__file__).parent.parent / "README.md").read_text()
+    after = text.split(f"<!-- {marker} -->", 1)[1]
+    return after.split("```", 2)[1].strip()
+
+
+def test_readme_commands_use_real_options():
+    main = _readme_block("main-command")
+    assert "pip install ." in main and "radioslam simulate paper-cnv" in main
+    help_text = run("simulate", "--help").stdout
+    for option in [w for w in main.split() if w.startswith("--")]:
+        assert option in help_text
+    assert "pytest" in _readme_block("test-command")

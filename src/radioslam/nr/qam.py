@@ -8,7 +8,7 @@ BITS_PER_SYMBOL = 4
 _SCALE = 1.0 / np.sqrt(10.0)
 
 
-def qam16_modulate(bits: np.ndarray) -> np.ndarray:
+def qam16_modulate(bits: np.ndarray, dtype=np.complex128) -> np.ndarray:
     """Map bits (..., 4k) of 0/1 to 16-QAM symbols (..., k).
 
     d = [(1−2b0)(2−(1−2b2)) + j(1−2b1)(2−(1−2b3))] / √10, 38.211 §5.1.4.
@@ -18,7 +18,7 @@ def qam16_modulate(bits: np.ndarray) -> np.ndarray:
         raise ValueError("the bit count must be a multiple of 4")
     b = b.reshape(*b.shape[:-1], -1, BITS_PER_SYMBOL)
     index = (b[..., 0] << 3) | (b[..., 1] << 2) | (b[..., 2] << 1) | b[..., 3]
-    return _TABLE[index]
+    return _TABLE.astype(dtype, copy=False)[index]
 
 
 def _table() -> np.ndarray:

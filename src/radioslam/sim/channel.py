@@ -44,11 +44,13 @@ def channel_response(gains: np.ndarray, delays_s: np.ndarray, subcarriers: np.nd
 
 
 def binned_channel_response(gains: np.ndarray, delays_samples: np.ndarray, subcarriers: np.ndarray,
-                            spacing_hz: float, sample_rate_hz: float):
+                            spacing_hz: float, sample_rate_hz: float, row_blocks: int = 1):
     """Channel split by arrival bin d_k = ⌈τ_k·f_s⌉.
 
     Returns (d_min, d_max, cumulative) with cumulative[:, m] = Σ_{k: d_k ≤ d_min+m} of the
     paths' responses, for m = 0 … d_max − d_min (the last one is the full H).
+    ``row_blocks`` equal blocks of rows (the orientations) each skip the paths that
+    have zero gain on all of their beams (those behind that orientation's array).
     """
     order = np.argsort(delays_samples, kind="stable")
     delays_samples, gains = delays_samples[order], gains[:, order]
@@ -56,11 +58,15 @@ def binned_channel_response(gains: np.ndarray, delays_samples: np.ndarray, subca
     d_min, d_max = int(d[0]), int(d[-1])
     phasors = delay_phasors(delays_samples / sample_rate_hz, subcarriers, spacing_hz)
     cumulative = np.empty((gains.shape[0], d_max - d_min + 1, len(subcarriers)), dtype=np.complex128)
-    edges = np.searchsorted(d, np.arange(d_min, d_max + 2))  # paths of bin m: edges[m] … edges[m+1]
-    running = np.zeros((gains.shape[0], len(subcarriers)), dtype=np.complex128)
-    for m in range(d_max - d_min + 1):  # one matmul per delay bin (tens); paths stay vectorized
-        lo, hi = edges[m], edges[m + 1]
-        if hi > lo:
-            running = running + gains[:, lo:hi] @ phasors[lo:hi]
-        cumulative[:, m] = running
+    bins = np.arange(d_min, d_max + 2)
+    for rows in np.array_split(np.arange(gains.shape[0]), row_blocks):  # orientations (4)
+        cols = np.flatnonzero(np.any(gains[rows] != 0, axis=0))
+        g, e = gains[np.ix_(rows, cols)], phasors[cols]
+        edges = np.searchsorted(d[cols], bins)  # paths of bin m: edges[m] … edges[m+1]
+        running = np.zeros((len(rows), len(subcarriers)), dtype=np.complex128)
+        for m in range(d_max - d_min + 1):  # one matmul per delay bin (tens); paths stay vectorized
+            lo, hi = edges[m], edges[m + 1]
+            if hi > lo:
+                running = running + g[:, lo:hi] @ e[lo:hi]
+            cumulative[rows, m] = running
     return d_min, d_max, cumulative

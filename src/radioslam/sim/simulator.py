@@ -86,10 +86,12 @@ class Simulator:
             grid = add_noise(h[:, None, :] * qam16_modulate(bits), self.noise_variance, rng)
             return Capture(mode=CaptureMode.GRID, grid=grid, fft_offset_samples=self.timing_offset(), **common)
         # 4b. time-domain windows: every path at its exact fractional delay
-        tx = np.concatenate([np.broadcast_to(pss_grid(radio.pss, radio.n_id2, p), (len(beams), 1, len(p))),
-                             qam16_modulate(bits)], axis=1)
+        tx = np.empty((len(beams), 1 + radio.symbols_per_beam, len(p)), dtype=np.complex64)
+        tx[:, 0] = pss_grid(radio.pss, radio.n_id2, p)
+        tx[:, 1:] = qam16_modulate(bits, np.complex64)
         d_min, _, cumulative = binned_channel_response(gains, delays * num.sample_rate_hz, p,
-                                                       radio.subcarrier_spacing_hz, num.sample_rate_hz)
+                                                       radio.subcarrier_spacing_hz, num.sample_rate_hz,
+                                                       row_blocks=radio.orientations)
         clean = synthesize_windows(tx, num.cp_lengths(symbols), cumulative, d_min, num, self.window_length)
         # 5. AWGN at the ★ SNR of the reference echo
         return Capture(mode=CaptureMode.WAVEFORM, samples=add_noise(clean, self.noise_variance, rng), **common)
