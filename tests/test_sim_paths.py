@@ -99,3 +99,23 @@ def test_occluded_specular_is_dropped():
     paths = echo_paths(scene, scene.poses[0], leakage=False)
     spec = paths.kind == PathKind.SPECULAR
     assert np.allclose(paths.point[spec], [[3.0, 0.0]])
+
+
+@pytest.mark.parametrize("heading_deg, world_deg", [(0, 30), (90, 120), (90, 270), (-45, 100), (10, -75)])
+def test_strongest_beam_points_at_the_target_in_the_terminal_frame(heading_deg, world_deg):
+    from radioslam.capture import CaptureMode
+    from radioslam.sim import Simulator
+
+    heading, direction = np.radians(heading_deg), np.radians(world_deg)
+    centre = 5.0 * np.array([np.cos(direction), np.sin(direction)])
+    along = 0.5 * np.array([-np.sin(direction), np.cos(direction)])
+    scene = scene_from_mapping({
+        "version": 1, "name": "rotated-plate",
+        "walls": [{"points": [(centre - along).tolist(), (centre + along).tolist()], "material": "metal"}],
+        "trajectory": {"poses": [[0.0, 0.0, float(heading)]]},
+        "radio": {"snr_db": 300.0, "isolation_db": 300.0}})
+    cap = Simulator.from_scene(scene, CaptureMode.GRID).simulate_pose(0, np.random.default_rng(0))
+    energy = np.mean(np.abs(cap.grid) ** 2, axis=(1, 2))
+    best = np.argmax(energy)
+    local = np.angle(np.exp(1j * (direction - heading)))
+    assert abs(np.angle(np.exp(1j * (cap.beam_angle_rad[best] - local)))) < np.radians(1.5)

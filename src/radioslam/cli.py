@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
-from enum import Enum
 from functools import wraps
 from pathlib import Path
 from typing import Optional
@@ -18,11 +17,6 @@ from radioslam.errors import RadioslamError
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   rich_markup_mode=None, help="Active mmWave sensing SLAM in 5G NR (arXiv 2507.04662).")
 err = Console(stderr=True, highlight=False)
-
-
-class Mode(str, Enum):
-    WAVEFORM = "waveform"
-    GRID = "grid"
 
 
 def _fail(message: str) -> None:
@@ -69,10 +63,8 @@ def simulate(
     seed: int = typer.Option(0, "--seed", help="seed of every random draw"),
     snr_db: Optional[float] = typer.Option(None, "--snr-db", help="per-RE SNR of the reference echo, dB"),
     save_iq: bool = typer.Option(False, "--save-iq", help="write SigMF captures/NNNN.sigmf-{meta,data}"),
-    mode: Mode = typer.Option(Mode.WAVEFORM, "--mode", help="waveform (IQ) or grid (resource elements, not saved)"),
 ) -> None:
     """Simulate a scene: scene.yaml, ground_truth.tum and, with --save-iq, SigMF captures."""
-    from radioslam.capture import CaptureMode
     from radioslam.io import write_capture, write_tum
     from radioslam.io.atomic import atomic_write_text
     from radioslam.io.rundir import RunDir
@@ -80,15 +72,12 @@ def simulate(
     from radioslam.sim import Simulator
 
     loaded = load_scene(scene).with_radio(snr_db=snr_db)
-    if save_iq and mode is Mode.GRID:
-        raise RadioslamError("grid-mode captures are resource grids, not IQ: drop --mode grid",
-                             field="--save-iq")
     run = RunDir(out)
     run.root.mkdir(parents=True, exist_ok=True)
     atomic_write_text(run.scene, scene_to_yaml(loaded))
     write_tum(run.ground_truth, run.pose_timestamps(len(loaded.poses)), loaded.poses)
     if save_iq:
-        sim = Simulator.from_scene(loaded, CaptureMode(mode.value))
+        sim = Simulator.from_scene(loaded)
         with progress() as bar:
             task = bar.add_task("simulating", total=len(loaded.poses))
             for capture in sim.simulate(seed):

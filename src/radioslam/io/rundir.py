@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 
 @dataclass(frozen=True)
 class RunDir:
@@ -34,8 +36,7 @@ class RunDir:
     def scans(self) -> Path:
         return self.root / "scans"
 
-    def pose_timestamps(self, count: int):
+    @staticmethod
+    def pose_timestamps(count: int) -> np.ndarray:
         """Poses are stamped 1 s apart, t = index."""
-        import numpy as np
-
         return np.arange(count, dtype=np.float64)

@@ -45,7 +45,8 @@ def channel_response(gains: np.ndarray, delays_s: np.ndarray, subcarriers: np.nd
 
 def binned_channel_response(gains: np.ndarray, delays_samples: np.ndarray, subcarriers: np.ndarray,
                             spacing_hz: float, sample_rate_hz: float, row_blocks: int = 1):
-    """Channel split by arrival bin d_k = ⌈τ_k·f_s⌉.
+    """Channel split by arrival bin d_k = ⌈τ_k·f_s − 1e-9⌉ (a path within 1e-9 sample of a
+    sample instant counts as arrived there, so round-off in τ·f_s cannot move a gate).
 
     Returns (d_min, d_max, cumulative) with cumulative[:, m] = Σ_{k: d_k ≤ d_min+m} of the
     paths' responses, for m = 0 … d_max − d_min (the last one is the full H).
