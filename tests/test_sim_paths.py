@@ -84,7 +84,7 @@ def test_wall_behind_glass_is_attenuated_by_two_way_transmission():
         return dict(zip(np.round(p.angle[keep], 9), p.amplitude[keep]))
 
     a, b = far_diffuse(with_leaf), far_diffuse(without)
-    behind_leaf = [k for k in a if abs(np.tan(k) * 4.8) < 0.3]  # rays through the leaf near y = 0
+    behind_leaf = [k for k in a if abs(np.tan(k) * 4.96) < 0.3]  # rays through the leaf near y = 0
     assert behind_leaf
     ratio = np.array([abs(a[k] / b[k]) for k in behind_leaf])
     assert np.allclose(ratio, 0.70**2, rtol=1e-9)
