@@ -15,6 +15,13 @@ def run(*args, cwd=None):
                           cwd=cwd, timeout=300)
 
 
+def test_version():
+    from radioslam import __version__
+
+    out = run("--version")
+    assert out.returncode == 0 and out.stdout.strip() == f"radioslam {__version__}"
+
+
 def test_scenes_lists_the_builtins():
     out = run("scenes")
     assert out.returncode == 0

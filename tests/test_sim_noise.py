@@ -6,21 +6,12 @@ import pytest
 from radioslam.capture import CaptureMode
 from radioslam.config import RadioConfig
 from radioslam.nr import demodulate
-from radioslam.sim import Simulator, noise_variance, reference_echo_power
+from radioslam.sim import Simulator, measured_snr_db, noise_variance, reference_echo_power
 from radioslam.sim.noise import reference_scene
 
 
 def _boresight(cap):
     return int(np.flatnonzero((cap.orientation == 0) & (cap.beam_index == 0))[0])
-
-
-def _estimate_snr_db(y: np.ndarray, x: np.ndarray) -> float:
-    """Blind per-RE SNR from R observations y = H·x + z with known x (per subcarrier LS over R)."""
-    energy = np.sum(np.abs(x) ** 2, axis=0)
-    h = np.sum(y * x.conj(), axis=0) / energy
-    noise = np.sum(np.abs(y - h * x) ** 2) / (y.size - y.shape[1])
-    signal = np.mean(np.abs(h) ** 2) - np.mean(noise / energy)
-    return 10 * np.log10(signal / noise)
 
 
 @pytest.mark.parametrize("snr_db", [0.0, 10.0, 20.0])
@@ -30,11 +21,9 @@ def test_noise_level_matches_snr_on_the_reference_echo(snr_db):
     sim = Simulator.from_scene(scene)
     cap = sim.simulate_pose(0, np.random.default_rng(int(snr_db) + 1))
     b = _boresight(cap)
-    cp = cap.cp_lengths()[b]
-    starts = np.cumsum(np.concatenate([[0], cp[:-1] + 1024])) + cp
     timing = int(np.floor(radio.hardware_delay_s * radio.sample_rate_hz))
-    y = demodulate(cap.samples[b].astype(complex), starts[1:] + timing, sim.numerology)
-    measured = _estimate_snr_db(y, cap.tx_symbols()[b])
+    y = demodulate(cap.samples[b].astype(complex), cap.useful_starts()[b, 1:] + timing, sim.numerology)
+    measured = measured_snr_db(y, cap.tx_symbols()[b])
     assert measured == pytest.approx(snr_db, abs=0.3)
     # before the first echo arrives the window holds noise only, of variance σ²
     quiet = cap.samples[:, :3800].astype(complex)
@@ -45,7 +34,7 @@ def test_grid_mode_noise_matches_too():
     radio = RadioConfig(snr_db=10.0, isolation_db=400.0)
     cap = Simulator.from_scene(reference_scene(radio), CaptureMode.GRID).simulate_pose(0, np.random.default_rng(5))
     b = _boresight(cap)
-    assert _estimate_snr_db(cap.grid[b].astype(complex), cap.tx_symbols()[b]) == pytest.approx(10.0, abs=0.3)
+    assert measured_snr_db(cap.grid[b].astype(complex), cap.tx_symbols()[b]) == pytest.approx(10.0, abs=0.3)
 
 
 def test_echoes_scale_physically_from_the_reference():
@@ -57,3 +46,11 @@ def test_echoes_scale_physically_from_the_reference():
     concrete_gamma, concrete_s = 0.40, 0.40
     specular = (radio.wavelength_m / (4 * np.pi * 10.0) * concrete_gamma * np.sqrt(1 - concrete_s**2) * 8) ** 2
     assert 1.0 < p5 / specular < 2.0  # plus the diffuse echo within the beam
+
+
+def test_default_leakage_is_as_strong_as_the_reference_echo():
+    # documented in docs/architecture.md: 70 dB isolation ↔ leakage 0.3 dB below the reference echo
+    radio = RadioConfig()
+    ratio_db = -radio.isolation_db - 10 * np.log10(reference_echo_power(radio))
+    assert ratio_db == pytest.approx(-0.3, abs=0.1)
+    assert 10 * np.log10(reference_echo_power(radio)) == pytest.approx(-69.7, abs=0.1)

@@ -93,9 +93,7 @@ def test_waveform_mode_demodulates_to_grid_mode():
     grid_sim = Simulator.from_scene(scene, CaptureMode.GRID)
     grid = grid_sim.simulate_pose(7, np.random.default_rng(3))
     assert np.array_equal(wave.tx_bits, grid.tx_bits)
-    cp = wave.cp_lengths()
-    starts = np.cumsum(np.concatenate([np.zeros((len(cp), 1), int), cp[:, :-1] + 1024], axis=1), axis=1)
-    y = demodulate(wave.samples.astype(complex), starts[:, 1:] + cp[:, 1:] + grid.fft_offset_samples, NUM)
+    y = demodulate(wave.samples.astype(complex), wave.useful_starts()[:, 1:] + grid.fft_offset_samples, NUM)
     assert np.max(np.abs(y - grid.grid)) < 1e-6 * np.max(np.abs(grid.grid))
 
 

@@ -72,6 +72,16 @@ class Capture:
         """CP length (B, 1 + R) of every symbol in each beam's window."""
         return self.numerology.cp_lengths(self.symbol_indices)
 
+    def useful_starts(self) -> np.ndarray:
+        """Window sample (B, 1 + R) where each symbol's useful part (after its CP) starts.
+
+        The transmitted burst sends the window's symbols back to back from sample 0;
+        an echo delayed by d samples has its useful parts at ``useful_starts() + d``.
+        """
+        cp = self.cp_lengths()
+        lengths = cp + self.radio.fft_size
+        return np.cumsum(lengths, axis=1) - lengths + cp
+
     def validate(self) -> None:
         b, r, n_sc = self.n_beams, self.radio.symbols_per_beam, self.radio.n_subcarriers
         checks = [

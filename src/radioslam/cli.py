@@ -19,6 +19,20 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_
 err = Console(stderr=True, highlight=False)
 
 
+def _version(value: bool) -> None:
+    if value:
+        from radioslam import __version__
+
+        typer.echo(f"radioslam {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
+                                       help="print the version and exit")) -> None:
+    """Active mmWave sensing SLAM in 5G NR (arXiv 2507.04662)."""
+
+
 def _fail(message: str) -> None:
     err.print(f"radioslam: error: {message}", markup=False, soft_wrap=True)
     raise typer.Exit(2)

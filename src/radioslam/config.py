@@ -48,7 +48,7 @@ class RadioConfig(BaseModel):
     data: DataMode = DataMode.DIFFERENT
     snr_db: float = 10.0  # ★ per-RE SNR of the reference echo (DESIGN.md §2)
     hardware_delay_s: float = Field(32e-6, ge=0, le=1e-3)
-    isolation_db: float = 45.0  # TX→RX beam-space isolation of the full-duplex leakage
+    isolation_db: float = 70.0  # TX→RX beam-space isolation: leakage ≈ the 5 m reference echo
     array_baseline_m: float = Field(0.05, ge=0, le=1.0)  # TX/RX array centre spacing
     element_exponent: float = Field(1.0, ge=0)  # element power pattern cos^q(θ)
     ray_spacing_deg: float = Field(0.25, gt=0, le=2.0)

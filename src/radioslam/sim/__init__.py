@@ -1,11 +1,11 @@
 """Echo simulator: ray-traced echo paths → NR waveform or resource grid → Capture."""
 
 from radioslam.sim.channel import beam_path_gains, channel_response, delay_phasors
-from radioslam.sim.noise import noise_variance, reference_echo_power
+from radioslam.sim.noise import measured_snr_db, noise_variance, reference_echo_power
 from radioslam.sim.paths import EchoPaths, PathKind, echo_paths
 from radioslam.sim.simulator import Simulator
 from radioslam.sim.waveform import synthesize_windows
 
 __all__ = ["EchoPaths", "PathKind", "Simulator", "beam_path_gains", "channel_response",
-           "delay_phasors", "echo_paths", "noise_variance", "reference_echo_power",
+           "delay_phasors", "echo_paths", "measured_snr_db", "noise_variance", "reference_echo_power",
            "synthesize_windows"]
