@@ -3,6 +3,8 @@
 import numpy as np
 import pytest
 import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.integrate import trapezoid
 
 from radioslam.scene import (BUILTIN_MATERIALS, BUILTIN_SCENES, SceneError, builtin_scene, load_scene,
@@ -40,6 +42,10 @@ def _variant(**changes):
      "materials.x", "exceeds 1"),
     (_variant(walls=[{"points": [[0, 0], [0, 0]], "material": "metal"}]), "walls[0].points", "zero-length"),
     ([1, 2], "(top level)", "must be a mapping"),
+    (_variant(radio={"array_elements": 16, "codebook_bits": 7, "beams_per_side": 46}), "radio",
+     "exceed the 64 SSBs"),
+    (_variant(radio={"codebook_bits": 7, "beams_per_side": 31}), "radio", "exceed 304 reserved symbols"),
+    (_variant(radio={"subcarrier_spacing_hz": 60e3}), "radio", "120 kHz"),
 ])
 def test_scene_errors_name_field_and_reason(data, field, reason):
     with pytest.raises(SceneError) as info:
@@ -112,3 +118,32 @@ def test_directive_lobe_is_normalized_and_falls_off_with_incidence():
         values = m.backscatter_lobe(np.radians([0, 20, 45, 80]))
         assert np.all(np.diff(values) < 0), name
     assert Material(0.5, 0.5, 0.0, 0.0).backscatter_lobe(np.array([0.3])) == pytest.approx(1.0)
+
+
+_coord = st.floats(-20, 20, allow_nan=False).map(lambda v: round(v, 3))
+
+
+@st.composite
+def _scenes(draw):
+    walls = []
+    for _ in range(draw(st.integers(1, 4))):
+        pts = draw(st.lists(st.tuples(_coord, _coord), min_size=2, max_size=5, unique=True))
+        pts = [p for i, p in enumerate(pts) if i == 0 or p != pts[i - 1]]
+        if len(pts) < 2:
+            pts = [(0.0, 30.0), (1.0, 30.0)]
+        walls.append({"points": [list(p) for p in pts], "material": draw(st.sampled_from(sorted(BUILTIN_MATERIALS)))})
+    pose = [draw(st.floats(-50, 50)), 60.0, draw(st.floats(-3.1, 3.1))]  # clear of every wall
+    radio = {"snr_db": draw(st.floats(-20, 40)), "hardware_delay_s": draw(st.floats(0, 1e-4))}
+    return {"version": 1, "name": draw(st.text(min_size=1, max_size=12)), "walls": walls,
+            "trajectory": {"poses": [pose]}, "radio": radio}
+
+
+@given(_scenes())
+@settings(max_examples=40, deadline=None)
+def test_any_valid_scene_survives_the_yaml_round_trip(tmp_path_factory, data):
+    scene = scene_from_mapping(data)
+    path = tmp_path_factory.mktemp("s") / "scene.yaml"
+    path.write_text(scene_to_yaml(scene), encoding="utf-8")
+    again = load_scene(path)
+    assert again.spec == scene.spec
+    assert np.array_equal(again.segments, scene.segments) and np.array_equal(again.poses, scene.poses)

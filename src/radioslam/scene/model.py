@@ -7,6 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from radioslam.config import RadioConfig
+from radioslam.nr.frame import FrameSchedule
+from radioslam.nr.numerology import NumerologyError
 from radioslam.scene.errors import SceneError
 from radioslam.scene.geometry import point_segment_distance
 from radioslam.scene.materials import BUILTIN_MATERIALS, Material
@@ -49,7 +51,12 @@ class Scene:
 
 
 def build_scene(spec: SceneSpec, source: str | None = None) -> Scene:
-    """Turn a schema-valid spec into arrays, checking materials, segments and clearances."""
+    """Turn a schema-valid spec into arrays, checking the radio schedule, materials, segments
+    and clearances."""
+    try:
+        FrameSchedule.from_config(spec.radio)
+    except NumerologyError as exc:
+        raise SceneError(str(exc), file=source, field="radio") from None
     materials = dict(BUILTIN_MATERIALS)
     materials.update({name: Material(**m.model_dump()) for name, m in spec.materials.items()})
     names = tuple(materials)
