@@ -14,17 +14,18 @@ import scipy.fft as sfft
 from radioslam.nr.numerology import Numerology
 
 
-def cp_gather_index(cp_lengths: np.ndarray, fft_size: int) -> np.ndarray:
+def cp_gather_index(cp_lengths: np.ndarray, fft_size: int, shift: int = 0) -> np.ndarray:
     """Index into concatenated useful parts (L·N) that inserts each symbol's CP.
 
-    Output sample j of symbol l is useful sample (j − cp_l) mod N.
+    Output sample j of symbol l is useful sample (j + shift − cp_l) mod N; a shift
+    s gives the periodic content of symbols whose gates arrive s samples late.
     """
     cp = np.asarray(cp_lengths, dtype=np.int64)
     lengths = cp + fft_size
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
     symbol = np.repeat(np.arange(len(cp)), lengths)
     j = np.arange(lengths.sum()) - starts[symbol]
-    return symbol * fft_size + (j - cp[symbol]) % fft_size
+    return symbol * fft_size + (j + shift - cp[symbol]) % fft_size
 
 
 def symbol_starts(cp_lengths: np.ndarray, fft_size: int) -> np.ndarray:

@@ -24,16 +24,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from radioslam.nr.numerology import Numerology
-from radioslam.nr.ofdm import symbol_starts, to_fft_bins
-
-
-def _base_index(cp: np.ndarray, fft_size: int, shift: int) -> np.ndarray:
-    """Gather index for one CP pattern: output j of symbol l reads useful sample (j + shift − cp_l) mod N."""
-    lengths = cp + fft_size
-    starts = symbol_starts(cp, fft_size)
-    symbol = np.repeat(np.arange(len(cp)), lengths)
-    j = np.arange(lengths.sum()) - starts[symbol]
-    return symbol * fft_size + (j + shift - cp[symbol]) % fft_size
+from radioslam.nr.ofdm import cp_gather_index, symbol_starts, to_fft_bins
 
 
 def _boundary_factors(tx_grid: np.ndarray, cp: np.ndarray, p: np.ndarray, n: int) -> np.ndarray:
@@ -75,7 +66,7 @@ def synthesize_windows(tx_grid: np.ndarray, cp: np.ndarray, cumulative: np.ndarr
         spectrum = to_fft_bins(through, numerology, np.complex64)
         useful = sfft.ifft(spectrum, axis=-1, norm="ortho", overwrite_x=True).reshape(len(rows), -1)
         length = int(pattern.sum() + n * len(pattern))
-        out[rows, d_max:d_max + length] = useful[:, _base_index(pattern, n, d_max)]
+        out[rows, d_max:d_max + length] = useful[:, cp_gather_index(pattern, n, d_max)]
         if m_count == 0:
             continue
         # corrections after each symbol boundary, where only some paths have moved on
