@@ -23,7 +23,7 @@ from radioslam.config import SPEED_OF_LIGHT, RadioConfig
 from radioslam.io import read_capture, write_capture
 from radioslam.nr import demodulate, pss
 from radioslam.scene import builtin_scene, cast_rays, scene_from_mapping
-from radioslam.sim import PathKind, Simulator, beam_path_gains, echo_paths, measured_snr_db
+from radioslam.sim import Simulator, echo_paths, measured_snr_db, strongest_echo
 from radioslam.sim.noise import reference_scene
 
 ROWS: list[tuple[str, str, str, bool]] = []
@@ -94,9 +94,7 @@ def delay_figures() -> None:
         paths = echo_paths(scene, scene.poses[0])
         beams = BeamSet.from_config(radio)
         b = np.flatnonzero((beams.orientation == 0) & (beams.index == 0))[0]
-        g = np.abs(beam_path_gains(beams, paths)[b])
-        g[paths.kind == PathKind.LEAKAGE] = 0
-        total = paths.delay_s[np.argmax(g)] + radio.hardware_delay_s
+        total = paths.delay_s[strongest_echo(beams, paths, b)] + radio.hardware_delay_s
         exact = 2 * np.sqrt(r**2 + radio.array_baseline_m**2 / 4) / SPEED_OF_LIGHT + radio.hardware_delay_s
         worst_bistatic = max(worst_bistatic, abs(total - exact))
         worst_2r = max(worst_2r, abs(total - (2 * r / SPEED_OF_LIGHT + radio.hardware_delay_s)))

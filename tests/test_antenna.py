@@ -5,7 +5,6 @@ import pytest
 from scipy.signal import find_peaks
 
 from radioslam.antenna import BeamSet, array_response, beam_angle, dft_codebook, steering_vector
-from radioslam.config import RadioConfig
 
 
 def _first_sidelobe_db(gain: np.ndarray) -> float:

@@ -43,7 +43,8 @@ def test_simulate_writes_the_run_directory(tmp_path):
     again = run("simulate", "single-plate:3.2", "--out", str(tmp_path / "run2"), "--seed", "4", "--save-iq",
                 "--snr-db", "15")
     assert again.returncode == 0
-    assert (run_dir / "captures/0000.sigmf-data").read_bytes() == (tmp_path / "run2/captures/0000.sigmf-data").read_bytes()
+    first, second = run_dir / "captures/0000.sigmf-data", tmp_path / "run2/captures/0000.sigmf-data"
+    assert first.read_bytes() == second.read_bytes()
 
 
 SCENE = """version: 1

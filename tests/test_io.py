@@ -104,7 +104,8 @@ def test_missing_files(tmp_path):
 
 
 def test_grid_captures_are_not_iq(tmp_path):
-    cap = Simulator.from_scene(builtin_scene("single-plate"), CaptureMode.GRID).simulate_pose(0, np.random.default_rng(0))
+    sim = Simulator.from_scene(builtin_scene("single-plate"), CaptureMode.GRID)
+    cap = sim.simulate_pose(0, np.random.default_rng(0))
     with pytest.raises(SigMFError, match="waveform"):
         write_capture(cap, tmp_path / "g")
 

@@ -7,8 +7,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.integrate import trapezoid
 
-from radioslam.scene import (BUILTIN_MATERIALS, BUILTIN_SCENES, SceneError, builtin_scene, load_scene,
-                             scene_from_mapping, scene_to_yaml)
+from radioslam.scene import (
+    BUILTIN_MATERIALS,
+    BUILTIN_SCENES,
+    SceneError,
+    builtin_scene,
+    load_scene,
+    scene_from_mapping,
+    scene_to_yaml,
+)
 from radioslam.scene.materials import Material
 
 GOOD = {

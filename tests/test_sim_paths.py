@@ -6,7 +6,7 @@ import pytest
 from radioslam.antenna import BeamSet
 from radioslam.config import SPEED_OF_LIGHT
 from radioslam.scene import builtin_scene, scene_from_mapping
-from radioslam.sim import PathKind, beam_path_gains, echo_paths
+from radioslam.sim import PathKind, echo_paths, strongest_echo
 
 
 @pytest.mark.parametrize("r", [0.8, 3.2, 6.4, 12.8])
@@ -16,9 +16,7 @@ def test_single_plate_strongest_echo_is_2r_over_c_plus_hardware_delay(r):
     paths = echo_paths(scene, scene.poses[0])
     beams = BeamSet.from_config(radio)
     boresight = np.flatnonzero((beams.orientation == 0) & (beams.index == 0))[0]
-    gains = np.abs(beam_path_gains(beams, paths)[boresight])
-    gains[paths.kind == PathKind.LEAKAGE] = 0
-    k = np.argmax(gains)
+    k = strongest_echo(beams, paths, boresight)
     total = paths.delay_s[k] + radio.hardware_delay_s
     b = radio.array_baseline_m
     assert total == pytest.approx(2 * np.sqrt(r**2 + b**2 / 4) / SPEED_OF_LIGHT + radio.hardware_delay_s,

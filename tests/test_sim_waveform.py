@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from radioslam.capture import CaptureMode
@@ -30,28 +30,16 @@ def brute_force(grid, cp, delays_samples, gains, length):
     y = np.zeros(length, complex)
     for g, tau in zip(gains, delays_samples):  # a handful of paths in this reference
         t = n - tau
-        for l in range(len(cp)):
-            inside = (t >= starts[l] - 1e-9) & (t < ends[l] - 1e-9)
-            phase = np.exp(2j * np.pi * np.outer(t[inside] - starts[l] - cp[l], p) / n_fft)
-            y[inside] += g * phase @ grid[l] / np.sqrt(n_fft)
+        for sym in range(len(cp)):
+            inside = (t >= starts[sym] - 1e-9) & (t < ends[sym] - 1e-9)
+            phase = np.exp(2j * np.pi * np.outer(t[inside] - starts[sym] - cp[sym], p) / n_fft)
+            y[inside] += g * phase @ grid[sym] / np.sqrt(n_fft)
     return y
-
-
-def test_synthesis_equals_the_continuous_time_signal(rng):
-    cp = np.array([72, 136, 72])
-    grid = qam16_modulate(random_bits(rng, (3, 792 * 4)))
-    delays = np.array([10.37, 12.0, 15.81, 33.5, 12.0001])
-    gains = rng.standard_normal(5) + 1j * rng.standard_normal(5)
-    length = int((cp + 1024).sum() + 48)
-    d_min, _, cum = binned_channel_response(gains[None], delays, NUM.subcarrier_indices(), 120e3,
-                                            NUM.sample_rate_hz)
-    fast = synthesize_windows(grid[None], cp[None], cum, d_min, NUM, length)[0]
-    slow = brute_force(grid, cp, delays, gains, length)
-    assert np.max(np.abs(fast - slow)) < 2e-6 * np.max(np.abs(slow))
 
 
 @given(st.lists(st.floats(0.0, 60.0), min_size=1, max_size=5),
        st.lists(st.sampled_from([72, 136]), min_size=1, max_size=3), st.integers(0, 2**31))
+@example([10.37, 12.0, 15.81, 33.5, 12.0001], [72, 136, 72], 1)  # an exact integer and a near-tie
 @settings(max_examples=15, deadline=None)
 def test_synthesis_equals_the_continuous_time_signal_for_any_delays(delays, cps, seed):
     rng = np.random.default_rng(seed)

@@ -148,7 +148,8 @@ def read_capture(base_or_meta: str | Path) -> Capture:
         for key in ANNOTATION_KEYS[:-1]:
             fields[key].append(ann[f"{NS}:{key}"])
     try:
-        return Capture(radio=radio, mode=CaptureMode.WAVEFORM, pose_index=int(_global(meta, f"{NS}:pose_index", meta_file)),
+        pose_index = int(_global(meta, f"{NS}:pose_index", meta_file))
+        return Capture(radio=radio, mode=CaptureMode.WAVEFORM, pose_index=pose_index,
                        orientation=np.array(fields["orientation"], dtype=np.int64),
                        beam_index=np.array(fields["beam_index"], dtype=np.int64),
                        beam_angle_rad=np.array(fields["beam_angle_rad"], dtype=np.float64),

@@ -67,8 +67,8 @@ class Numerology:
 
     def cp_lengths(self, symbol_indices: np.ndarray) -> np.ndarray:
         """CP length in samples of each absolute symbol index (38.211 §5.3.1)."""
-        l = np.asarray(symbol_indices) % self.symbols_per_subframe
-        long_cp = (l == 0) | (l == 7 * 2**self.mu)
+        in_subframe = np.asarray(symbol_indices) % self.symbols_per_subframe
+        long_cp = (in_subframe == 0) | (in_subframe == 7 * 2**self.mu)
         return self.cp_normal + self.cp_extra * long_cp.astype(np.int64)
 
     def subcarrier_indices(self) -> np.ndarray:

@@ -37,6 +37,13 @@ def beam_path_gains(beams: BeamSet, paths: EchoPaths) -> np.ndarray:
     return gain * paths.amplitude[None, :]
 
 
+def strongest_echo(beams: BeamSet, paths: EchoPaths, beam: int) -> int:
+    """Index of the path with the largest |ϖ·b| on ``beam``, leakage excluded."""
+    gain = np.abs(beam_path_gains(beams, paths)[beam])
+    gain[paths.kind == PathKind.LEAKAGE] = 0.0
+    return int(np.argmax(gain))
+
+
 def channel_response(gains: np.ndarray, delays_s: np.ndarray, subcarriers: np.ndarray,
                      spacing_hz: float) -> np.ndarray:
     """H (B, n_sc) from per-beam path gains (B, P) and path delays (P,)."""
