@@ -93,7 +93,7 @@ class BeamSet:
         ϖ_i(θ − k·π/2) times the element pattern cos^q each way; zero behind the array.
         """
         local = np.asarray(theta_terminal)[None, :] - self.orientation_angle[:, None]
-        local = np.angle(np.exp(1j * local))
+        local = (local + np.pi) % (2 * np.pi) - np.pi  # wrap to [−π, π)
         front = np.abs(local) < np.pi / 2
         cos_l = np.where(front, np.cos(local), 0.0)
         out = np.empty(local.shape)

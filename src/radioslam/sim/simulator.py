@@ -94,7 +94,8 @@ class Simulator:
                                                        row_blocks=radio.orientations)
         clean = synthesize_windows(tx, num.cp_lengths(symbols), cumulative, d_min, num, self.window_length)
         # 5. AWGN at the ★ SNR of the reference echo
-        return Capture(mode=CaptureMode.WAVEFORM, samples=add_noise(clean, self.noise_variance, rng), **common)
+        return Capture(mode=CaptureMode.WAVEFORM, samples=add_noise(clean, self.noise_variance, rng, inplace=True),
+                       **common)
 
     def simulate(self, seed: int):
         """Captures of every pose; pose i draws from its own child of ``SeedSequence(seed)``."""
