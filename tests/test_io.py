@@ -136,3 +136,12 @@ def test_bad_tum(tmp_path):
     path.write_text("0 nan 0 0 0 0 0 1\n")
     with pytest.raises(TumError, match="NaN"):
         read_tum(path)
+
+
+def test_corrupted_data_fails_the_checksum(written):
+    data = data_path(str(written)[: -len(".sigmf-meta")])
+    raw = bytearray(data.read_bytes())
+    raw[1000] ^= 0xFF
+    data.write_bytes(bytes(raw))
+    with pytest.raises(SigMFError, match="rejected by sigmf"):
+        read_capture(written)

@@ -127,7 +127,7 @@ def read_capture(base_or_meta: str | Path) -> Capture:
         raise SigMFError(f"truncated or oversized: {size // 8} samples, the annotations need "
                          f"{expected * window}", file=data_file, field="core:sample_count")
     try:
-        record = sigmf.fromfile(str(meta_file))
+        record = SigMFFile(metadata=meta, data_file=str(data_file))  # verifies core:sha512
         samples = record.read_samples().reshape(expected, window)
     except (_SigMFLibraryError, ValueError, OSError) as exc:
         raise SigMFError(f"rejected by sigmf: {exc}", file=meta_file, field="(document)") from None

@@ -47,6 +47,8 @@ class Simulator:
     beams: BeamSet
     noise_variance: float
     window_length: int
+    window_symbols: np.ndarray  # (B, 1 + R) absolute symbol indices, the same at every pose
+    pss_symbol: np.ndarray  # (n_sc,) the PSS on the active subcarriers
 
     @classmethod
     def from_scene(cls, scene: Scene, mode: CaptureMode = CaptureMode.WAVEFORM) -> "Simulator":
@@ -54,11 +56,12 @@ class Simulator:
         num = Numerology.from_config(radio)
         schedule = FrameSchedule.from_config(radio)
         beams = BeamSet.from_config(radio)
-        cp = num.cp_lengths(schedule.window_symbols(beams.orientation, beams.slot))
+        symbols = schedule.window_symbols(beams.orientation, beams.slot)
         longest_delay = radio.hardware_delay_s + (2 * radio.max_range_m + radio.array_baseline_m) / SPEED_OF_LIGHT
-        window = int((cp + num.fft_size).sum(axis=1).max() + np.ceil(longest_delay * num.sample_rate_hz)
-                     + WINDOW_GUARD_SAMPLES)
-        return cls(scene, radio, mode, num, schedule, beams, noise_variance(radio), window)
+        window = int((num.cp_lengths(symbols) + num.fft_size).sum(axis=1).max()
+                     + np.ceil(longest_delay * num.sample_rate_hz) + WINDOW_GUARD_SAMPLES)
+        pss = pss_grid(radio.pss, radio.n_id2, num.subcarrier_indices())
+        return cls(scene, radio, mode, num, schedule, beams, noise_variance(radio), window, symbols, pss)
 
     def timing_offset(self) -> int:
         """Grid mode's FFT window timing: ⌊T_H·f_s⌋ samples after each useful part starts."""
@@ -74,11 +77,10 @@ class Simulator:
         delays = paths.delay_s + radio.hardware_delay_s
         # 3. what each beam transmits: PSS symbol, then R symbols of random 16-QAM
         bits = draw_tx_bits(radio, len(beams), rng)
-        symbols = self.schedule.window_symbols(beams.orientation, beams.slot)
         p = num.subcarrier_indices()
         common = dict(radio=radio, pose_index=pose_index, orientation=beams.orientation,
                       beam_index=beams.index, beam_angle_rad=beams.angle, ssb_index=beams.slot,
-                      symbol_indices=symbols, tx_bits=bits)
+                      symbol_indices=self.window_symbols, tx_bits=bits)
         if self.mode is CaptureMode.GRID:
             # 4a. resource grid directly, y = H(p)·x + z (eq. (4)), at the receiver's FFT timing
             h = channel_response(gains, delays, p, radio.subcarrier_spacing_hz)
@@ -87,12 +89,13 @@ class Simulator:
             return Capture(mode=CaptureMode.GRID, grid=grid, fft_offset_samples=self.timing_offset(), **common)
         # 4b. time-domain windows: every path at its exact fractional delay
         tx = np.empty((len(beams), 1 + radio.symbols_per_beam, len(p)), dtype=np.complex64)
-        tx[:, 0] = pss_grid(radio.pss, radio.n_id2, p)
+        tx[:, 0] = self.pss_symbol
         tx[:, 1:] = qam16_modulate(bits, np.complex64)
         d_min, _, cumulative = binned_channel_response(gains, delays * num.sample_rate_hz, p,
                                                        radio.subcarrier_spacing_hz, num.sample_rate_hz,
                                                        row_blocks=radio.orientations)
-        clean = synthesize_windows(tx, num.cp_lengths(symbols), cumulative, d_min, num, self.window_length)
+        clean = synthesize_windows(tx, num.cp_lengths(self.window_symbols), cumulative, d_min, num,
+                                   self.window_length)
         # 5. AWGN at the ★ SNR of the reference echo
         return Capture(mode=CaptureMode.WAVEFORM, samples=add_noise(clean, self.noise_variance, rng, inplace=True),
                        **common)
