@@ -22,6 +22,11 @@ def test_version():
     assert out.returncode == 0 and out.stdout.strip() == f"radioslam {__version__}"
 
 
+def test_no_command_prints_help():
+    out = run()
+    assert out.returncode == 0 and "simulate" in out.stdout and not out.stderr
+
+
 def test_scenes_lists_the_builtins():
     out = run("scenes")
     assert out.returncode == 0
@@ -106,3 +111,25 @@ def test_readme_commands_use_real_options():
     for option in [w for w in main.split() if w.startswith("--")]:
         assert option in help_text
     assert "pytest" in _readme_block("test-command")
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["simulate", "single-plate", "--out", "OUT", "--snr-db", "nan"], "radio.snr_db: Input should be a finite number"),
+    (["simulate", "single-plate", "--out", "OUT", "--seed", "-1"], "'--seed'"),
+    (["simulate", "--bogus"], "No such option: --bogus"),
+    (["simulate", "single-plate"], "Missing option '--out'"),
+    (["teleport"], "No such command 'teleport'"),
+])
+def test_usage_errors_exit_2_with_one_line(tmp_path, args, fragment):
+    out = run(*[str(tmp_path / "o") if a == "OUT" else a for a in args])
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("radioslam: error: ") and fragment in lines[0]
+    assert not (tmp_path / "o").exists()
+
+
+def test_nan_coordinate_is_rejected(tmp_path):
+    path = tmp_path / "scene.yaml"
+    path.write_text(SCENE.replace("[-5, -5], [5, -5]", "[-5, .nan], [5, -5]"))
+    out = run("simulate", str(path), "--out", str(tmp_path / "o"))
+    assert out.returncode == 2 and "walls[0].points[0][1]: Input should be a finite number" in out.stderr

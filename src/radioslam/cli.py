@@ -14,7 +14,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from radioslam.errors import RadioslamError
 
-app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+app = typer.Typer(add_completion=False, invoke_without_command=True, pretty_exceptions_enable=False,
                   rich_markup_mode=None, help="Active mmWave sensing SLAM in 5G NR (arXiv 2507.04662).")
 err = Console(stderr=True, highlight=False)
 
@@ -28,9 +28,13 @@ def _version(value: bool) -> None:
 
 
 @app.callback()
-def _root(version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
+def _root(ctx: typer.Context,
+          version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
                                        help="print the version and exit")) -> None:
     """Active mmWave sensing SLAM in 5G NR (arXiv 2507.04662)."""
+    if ctx.invoked_subcommand is None:
+        typer.echo(ctx.get_help())
+        raise typer.Exit()
 
 
 def _fail(message: str) -> None:
@@ -74,7 +78,7 @@ def scenes() -> None:
 def simulate(
     scene: str = typer.Argument(..., help="scene YAML file or built-in name (see 'radioslam scenes')"),
     out: Path = typer.Option(..., "--out", help="run directory to write"),
-    seed: int = typer.Option(0, "--seed", help="seed of every random draw"),
+    seed: int = typer.Option(0, "--seed", min=0, help="seed of every random draw (≥ 0)"),
     snr_db: Optional[float] = typer.Option(None, "--snr-db", help="per-RE SNR of the reference echo, dB"),
     save_iq: bool = typer.Option(False, "--save-iq", help="write SigMF captures/NNNN.sigmf-{meta,data}"),
 ) -> None:
@@ -102,7 +106,28 @@ def simulate(
 
 
 def main() -> None:
-    app()
+    """Entry point: usage errors and interrupts end in one line too.
+
+    typer ≤ 0.2x raises click's exceptions, newer typer its vendored copy of them;
+    both carry ``format_message()`` and ``exit_code``, which is all this needs.
+    """
+    command = typer.main.get_command(app)
+    try:
+        code = command.main(prog_name="radioslam", standalone_mode=False)
+    except KeyboardInterrupt:
+        err.print("radioslam: interrupted", markup=False)
+        sys.exit(130)
+    except Exception as exc:  # noqa: BLE001 - only click-style exceptions are handled here
+        if type(exc).__name__ == "Abort":
+            err.print("radioslam: interrupted", markup=False)
+            sys.exit(130)
+        if not (hasattr(exc, "format_message") and hasattr(exc, "exit_code")):
+            raise
+        ctx = getattr(exc, "ctx", None)
+        where = f"{ctx.command_path}: " if ctx is not None else ""
+        err.print(f"radioslam: error: {where}{exc.format_message()}", markup=False, soft_wrap=True)
+        sys.exit(exc.exit_code)
+    sys.exit(code if isinstance(code, int) else 0)
 
 
 if __name__ == "__main__":

@@ -31,7 +31,7 @@ class DataMode(str, Enum):
 class RadioConfig(BaseModel):
     """Every radio parameter of the simulated prototype, in SI units."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     carrier_hz: float = Field(28e9, gt=0)
     fft_size: int = Field(1024, ge=128)

@@ -35,6 +35,13 @@ def _reason(error: dict) -> str:
         not isinstance(error["input"], (dict, list)) else msg
 
 
+def validation_error(exc: ValidationError, source: str | None, prefix: tuple = ()) -> SceneError:
+    """The first pydantic error as a one-line SceneError naming the key path."""
+    first = exc.errors()[0]
+    loc = prefix + tuple(p for p in first["loc"] if not (isinstance(p, str) and p.startswith("function-")))
+    return SceneError(_reason(first), file=source, field=_key_path(loc))
+
+
 def scene_from_mapping(data: object, source: str | None = None) -> Scene:
     """Validate a parsed YAML document and build the scene."""
     if not isinstance(data, dict):
@@ -43,9 +50,7 @@ def scene_from_mapping(data: object, source: str | None = None) -> Scene:
     try:
         spec = SceneSpec.model_validate(data)
     except ValidationError as exc:
-        first = exc.errors()[0]
-        loc = tuple(p for p in first["loc"] if not (isinstance(p, str) and p.startswith("function-")))
-        raise SceneError(_reason(first), file=source, field=_key_path(loc)) from None
+        raise validation_error(exc, source) from None
     return build_scene(spec, source)
 
 

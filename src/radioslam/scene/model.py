@@ -45,8 +45,15 @@ class Scene:
 
     def with_radio(self, **overrides: object) -> "Scene":
         """The same scene with radio fields replaced (``None`` values are ignored)."""
+        from pydantic import ValidationError
+
+        from radioslam.scene.loader import validation_error
+
         changes = {k: v for k, v in overrides.items() if v is not None}
-        radio = RadioConfig(**{**self.radio.model_dump(), **changes})
+        try:
+            radio = RadioConfig(**{**self.radio.model_dump(), **changes})
+        except ValidationError as exc:
+            raise validation_error(exc, "(command line)", ("radio",)) from None
         return build_scene(self.spec.model_copy(update={"radio": radio}))
 
 
