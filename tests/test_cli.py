@@ -116,7 +116,7 @@ def test_readme_commands_use_real_options():
 @pytest.mark.parametrize("args, fragment", [
     (["simulate", "single-plate", "--out", "OUT", "--snr-db", "nan"], "radio.snr_db: Input should be a finite number"),
     (["simulate", "single-plate", "--out", "OUT", "--seed", "-1"], "'--seed'"),
-    (["simulate", "--bogus"], "No such option: --bogus"),
+    (["simulate", "--bogus"], "--bogus"),
     (["simulate", "single-plate"], "Missing option '--out'"),
     (["teleport"], "No such command 'teleport'"),
 ])
