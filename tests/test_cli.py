@@ -50,6 +50,11 @@ def test_simulate_writes_the_run_directory(tmp_path):
     assert again.returncode == 0
     first, second = run_dir / "captures/0000.sigmf-data", tmp_path / "run2/captures/0000.sigmf-data"
     assert first.read_bytes() == second.read_bytes()
+    # a rerun into the same directory drops the recordings of the earlier run
+    (run_dir / "captures/0007.sigmf-meta").write_text("{}")
+    (run_dir / "captures/notes.txt").write_text("mine")
+    assert run("simulate", "single-plate:3.2", "--out", str(run_dir)).returncode == 0
+    assert sorted(p.name for p in (run_dir / "captures").iterdir()) == ["notes.txt"]
 
 
 SCENE = """version: 1

@@ -64,7 +64,8 @@ def _edit_meta(path, change):
     (lambda m: m["annotations"][3].pop("radioslam:beam_index"), "annotations[3].radioslam:beam_index", "missing"),
     (lambda m: m["annotations"][2].update({"radioslam:tx_bits": "%%%"}), "annotations[2].radioslam:tx_bits",
      "base64"),
-    (lambda m: m["global"].pop("radioslam:radio"), "global.radioslam:radio", "missing"),
+    (lambda m: [m["global"].pop(k) for k in ("radioslam:radio", "radioslam:carrier_hz")],
+     "global.radioslam:carrier_hz", "missing"),
 ])
 def test_bad_metadata_is_named(written, change, field, reason):
     _edit_meta(written, change)
@@ -145,3 +146,10 @@ def test_corrupted_data_fails_the_checksum(written):
     data.write_bytes(bytes(raw))
     with pytest.raises(SigMFError, match="rejected by sigmf"):
         read_capture(written)
+
+
+def test_recordings_without_the_radio_block_use_the_named_global_fields(capture, written):
+    _edit_meta(written, lambda m: m["global"].pop("radioslam:radio"))
+    back = read_capture(written)
+    assert back.radio.carrier_hz == 28e9 and back.radio.codebook_bits == 6 and back.radio.array_elements == 8
+    assert np.array_equal(back.samples, capture.samples)

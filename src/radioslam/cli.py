@@ -92,6 +92,7 @@ def simulate(
     loaded = load_scene(scene).with_radio(snr_db=snr_db)
     run = RunDir(out)
     run.root.mkdir(parents=True, exist_ok=True)
+    run.clear_captures()  # a run directory never mixes recordings of two runs
     atomic_write_text(run.scene, scene_to_yaml(loaded))
     write_tum(run.ground_truth, run.pose_timestamps(len(loaded.poses)), loaded.poses)
     if save_iq:

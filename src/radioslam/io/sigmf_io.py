@@ -93,6 +93,21 @@ def _global(meta: dict, key: str, path: Path):
         raise SigMFError("required field is missing", file=path, field=f"global.{key}") from None
 
 
+def _radio_block(meta: dict, path: Path) -> dict:
+    """The full ``radioslam:radio`` block, or for recordings made by other tools the
+    individual global fields (carrier, codebook bits, array elements, optional
+    hardware delay) on top of the defaults."""
+    block = meta.get("global", {}).get(f"{NS}:radio")
+    if block is not None:
+        return block
+    fields = {"carrier_hz": _global(meta, f"{NS}:carrier_hz", path),
+              "codebook_bits": _global(meta, f"{NS}:codebook_bits", path),
+              "array_elements": _global(meta, f"{NS}:array_elements", path)}
+    if f"{NS}:hardware_delay_s" in meta["global"]:
+        fields["hardware_delay_s"] = meta["global"][f"{NS}:hardware_delay_s"]
+    return fields
+
+
 def read_capture(base_or_meta: str | Path) -> Capture:
     """Read a recording written by :func:`write_capture` (or by hardware, in the same layout)."""
     text = str(base_or_meta)
@@ -106,9 +121,9 @@ def read_capture(base_or_meta: str | Path) -> Capture:
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise SigMFError(f"not valid JSON: {exc}", file=meta_file, field="(document)") from None
     try:
-        radio = RadioConfig.model_validate(_global(meta, f"{NS}:radio", meta_file))
+        radio = RadioConfig.model_validate(_radio_block(meta, meta_file))
     except ValueError as exc:
-        raise SigMFError(f"invalid radio block: {exc.errors()[0]['msg']}", file=meta_file,
+        raise SigMFError(f"invalid radio parameters: {exc.errors()[0]['msg']}", file=meta_file,
                          field=f"global.{NS}:radio") from None
     rate = _global(meta, "core:sample_rate", meta_file)
     if not isinstance(rate, (int, float)) or abs(rate - radio.sample_rate_hz) > 1e-6 * radio.sample_rate_hz:
