@@ -25,6 +25,7 @@ import numpy as np
 from radioslam.config import RadioConfig
 from radioslam.errors import RadioslamError
 from radioslam.nr.numerology import Numerology
+from radioslam.nr.ofdm import symbol_starts
 from radioslam.nr.qam import qam16_modulate
 
 
@@ -79,8 +80,7 @@ class Capture:
         an echo delayed by d samples has its useful parts at ``useful_starts() + d``.
         """
         cp = self.cp_lengths()
-        lengths = cp + self.radio.fft_size
-        return np.cumsum(lengths, axis=1) - lengths + cp
+        return symbol_starts(cp, self.radio.fft_size) + cp
 
     def validate(self) -> None:
         b, r, n_sc = self.n_beams, self.radio.symbols_per_beam, self.radio.n_subcarriers

@@ -29,9 +29,12 @@ def cp_gather_index(cp_lengths: np.ndarray, fft_size: int, shift: int = 0) -> np
 
 
 def symbol_starts(cp_lengths: np.ndarray, fft_size: int) -> np.ndarray:
-    """Sample index where each symbol (its CP) starts, for symbols sent back to back."""
+    """Sample index where each symbol (its CP) starts, for symbols sent back to back.
+
+    Works along the last axis, so (B, L) CP lengths give (B, L) starts.
+    """
     lengths = np.asarray(cp_lengths, dtype=np.int64) + fft_size
-    return np.concatenate([[0], np.cumsum(lengths)[:-1]])
+    return np.cumsum(lengths, axis=-1) - lengths
 
 
 def to_fft_bins(grid: np.ndarray, numerology: Numerology, dtype=np.complex128) -> np.ndarray:

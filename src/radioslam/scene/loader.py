@@ -7,39 +7,9 @@ from pathlib import Path
 import yaml
 from pydantic import ValidationError
 
-from radioslam.scene.errors import SceneError
+from radioslam.scene.errors import SceneError, validation_error
 from radioslam.scene.model import Scene, build_scene
 from radioslam.scene.schema import SceneSpec
-
-_MESSAGES = {
-    "extra_forbidden": "unknown key",
-    "missing": "required key is missing",
-}
-
-
-def _key_path(loc: tuple) -> str:
-    out = ""
-    for part in loc:
-        if isinstance(part, int):
-            out += f"[{part}]"
-        else:
-            out += ("." if out else "") + str(part)
-    return out or "(top level)"
-
-
-def _reason(error: dict) -> str:
-    if error["type"] in _MESSAGES:
-        return _MESSAGES[error["type"]]
-    msg = str(error["msg"]).removeprefix("Value error, ")
-    return f"{msg} (got {error['input']!r})" if error["type"] != "value_error" and \
-        not isinstance(error["input"], (dict, list)) else msg
-
-
-def validation_error(exc: ValidationError, source: str | None, prefix: tuple = ()) -> SceneError:
-    """The first pydantic error as a one-line SceneError naming the key path."""
-    first = exc.errors()[0]
-    loc = prefix + tuple(p for p in first["loc"] if not (isinstance(p, str) and p.startswith("function-")))
-    return SceneError(_reason(first), file=source, field=_key_path(loc))
 
 
 def scene_from_mapping(data: object, source: str | None = None) -> Scene:

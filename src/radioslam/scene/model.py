@@ -5,11 +5,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from pydantic import ValidationError
 
 from radioslam.config import RadioConfig
 from radioslam.nr.frame import FrameSchedule
 from radioslam.nr.numerology import NumerologyError
-from radioslam.scene.errors import SceneError
+from radioslam.scene.errors import SceneError, validation_error
 from radioslam.scene.geometry import point_segment_distance
 from radioslam.scene.materials import BUILTIN_MATERIALS, Material
 from radioslam.scene.schema import SceneSpec
@@ -45,10 +46,6 @@ class Scene:
 
     def with_radio(self, **overrides: object) -> "Scene":
         """The same scene with radio fields replaced (``None`` values are ignored)."""
-        from pydantic import ValidationError
-
-        from radioslam.scene.loader import validation_error
-
         changes = {k: v for k, v in overrides.items() if v is not None}
         try:
             radio = RadioConfig(**{**self.radio.model_dump(), **changes})

@@ -48,6 +48,7 @@ class Simulator:
     noise_variance: float
     window_length: int
     window_symbols: np.ndarray  # (B, 1 + R) absolute symbol indices, the same at every pose
+    window_cp: np.ndarray  # (B, 1 + R) their CP lengths
     pss_symbol: np.ndarray  # (n_sc,) the PSS on the active subcarriers
 
     @classmethod
@@ -57,11 +58,12 @@ class Simulator:
         schedule = FrameSchedule.from_config(radio)
         beams = BeamSet.from_config(radio)
         symbols = schedule.window_symbols(beams.orientation, beams.slot)
+        cp = num.cp_lengths(symbols)
         longest_delay = radio.hardware_delay_s + (2 * radio.max_range_m + radio.array_baseline_m) / SPEED_OF_LIGHT
-        window = int((num.cp_lengths(symbols) + num.fft_size).sum(axis=1).max()
+        window = int((cp + num.fft_size).sum(axis=1).max()
                      + np.ceil(longest_delay * num.sample_rate_hz) + WINDOW_GUARD_SAMPLES)
         pss = pss_grid(radio.pss, radio.n_id2, num.subcarrier_indices())
-        return cls(scene, radio, mode, num, schedule, beams, noise_variance(radio), window, symbols, pss)
+        return cls(scene, radio, mode, num, schedule, beams, noise_variance(radio), window, symbols, cp, pss)
 
     def timing_offset(self) -> int:
         """Grid mode's FFT window timing: ⌊T_H·f_s⌋ samples after each useful part starts."""
@@ -94,8 +96,7 @@ class Simulator:
         d_min, _, cumulative = binned_channel_response(gains, delays * num.sample_rate_hz, p,
                                                        radio.subcarrier_spacing_hz, num.sample_rate_hz,
                                                        row_blocks=radio.orientations)
-        clean = synthesize_windows(tx, num.cp_lengths(self.window_symbols), cumulative, d_min, num,
-                                   self.window_length)
+        clean = synthesize_windows(tx, self.window_cp, cumulative, d_min, num, self.window_length)
         # 5. AWGN at the ★ SNR of the reference echo
         return Capture(mode=CaptureMode.WAVEFORM, samples=add_noise(clean, self.noise_variance, rng, inplace=True),
                        **common)
