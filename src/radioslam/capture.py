@@ -82,6 +82,20 @@ class Capture:
         cp = self.cp_lengths()
         return symbol_starts(cp, self.radio.fft_size) + cp
 
+    def select(self, rows: np.ndarray | list[int]) -> "Capture":
+        """The same capture restricted to some beams (rows of the beam axis)."""
+        rows = np.atleast_1d(np.asarray(rows, dtype=np.int64))
+
+        def pick(a):
+            return None if a is None else a[rows]
+
+        return Capture(radio=self.radio, mode=self.mode, pose_index=self.pose_index,
+                       orientation=self.orientation[rows], beam_index=self.beam_index[rows],
+                       beam_angle_rad=self.beam_angle_rad[rows], ssb_index=self.ssb_index[rows],
+                       symbol_indices=self.symbol_indices[rows], tx_bits=self.tx_bits[rows],
+                       samples=pick(self.samples), grid=pick(self.grid),
+                       fft_offset_samples=self.fft_offset_samples, source=self.source)
+
     def validate(self) -> None:
         b, r, n_sc = self.n_beams, self.radio.symbols_per_beam, self.radio.n_subcarriers
         checks = [

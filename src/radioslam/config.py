@@ -9,9 +9,15 @@ from __future__ import annotations
 
 from enum import Enum
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 SPEED_OF_LIGHT = 299_792_458.0  # m/s
+
+
+def bistatic_delay_s(range_m, baseline_m: float):
+    """Echo delay 2√(r² + b²/4)/c of a target at horizontal range r, TX and RX arrays stacked b apart."""
+    return 2.0 * np.sqrt(np.asarray(range_m, dtype=np.float64) ** 2 + 0.25 * baseline_m**2) / SPEED_OF_LIGHT
 
 
 class PssKind(str, Enum):

@@ -24,7 +24,7 @@ from enum import IntEnum
 
 import numpy as np
 
-from radioslam.config import SPEED_OF_LIGHT, RadioConfig
+from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
 from radioslam.scene.model import Scene
 from radioslam.scene.raycast import cast_rays
 
@@ -50,12 +50,8 @@ class EchoPaths:
         return len(self.delay_s)
 
 
-def _bistatic_delay(r: np.ndarray, baseline: float) -> np.ndarray:
-    return 2.0 * np.sqrt(r**2 + 0.25 * baseline**2) / SPEED_OF_LIGHT
-
-
 def _echo(r, gain_wo_range, radio: RadioConfig):
-    tau = _bistatic_delay(r, radio.array_baseline_m)
+    tau = bistatic_delay_s(r, radio.array_baseline_m)
     spread = radio.wavelength_m / (4.0 * np.pi * 2.0 * r)
     return tau, spread * gain_wo_range * np.exp(-2j * np.pi * radio.carrier_hz * tau)
 

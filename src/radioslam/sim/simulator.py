@@ -20,7 +20,7 @@ from radioslam.nr.qam import qam16_modulate, random_bits
 from radioslam.scene.model import Scene
 from radioslam.sim.channel import beam_path_gains, binned_channel_response, channel_response
 from radioslam.sim.noise import add_noise, noise_variance
-from radioslam.sim.paths import echo_paths
+from radioslam.sim.paths import EchoPaths, echo_paths
 from radioslam.sim.waveform import synthesize_windows
 
 WINDOW_GUARD_SAMPLES = 16
@@ -37,14 +37,20 @@ def draw_tx_bits(radio: RadioConfig, n_beams: int, rng: np.random.Generator) -> 
 
 @dataclass(frozen=True)
 class Simulator:
-    """Simulates captures of one scene. Build with :meth:`from_scene`."""
+    """Simulates captures of one scene (or of given echo paths).
 
-    scene: Scene
+    Build with :meth:`from_scene`, or :meth:`from_radio` for paths that do not come
+    from a scene (point targets, calibration targets). ``rows`` selects a subset of
+    the 188 beams (all by default), e.g. only the boresight beam of a ranging trial.
+    """
+
+    scene: Scene | None
     radio: RadioConfig
     mode: CaptureMode
     numerology: Numerology
     schedule: FrameSchedule
     beams: BeamSet
+    rows: np.ndarray  # (B,) indices into the full beam set
     noise_variance: float
     window_length: int
     window_symbols: np.ndarray  # (B, 1 + R) absolute symbol indices, the same at every pose
@@ -52,37 +58,49 @@ class Simulator:
     pss_symbol: np.ndarray  # (n_sc,) the PSS on the active subcarriers
 
     @classmethod
-    def from_scene(cls, scene: Scene, mode: CaptureMode = CaptureMode.WAVEFORM) -> "Simulator":
-        radio = scene.radio
+    def from_scene(cls, scene: Scene, mode: CaptureMode = CaptureMode.WAVEFORM,
+                   rows: np.ndarray | None = None) -> "Simulator":
+        return cls.from_radio(scene.radio, mode, scene, rows)
+
+    @classmethod
+    def from_radio(cls, radio: RadioConfig, mode: CaptureMode = CaptureMode.WAVEFORM,
+                   scene: Scene | None = None, rows: np.ndarray | None = None) -> "Simulator":
         num = Numerology.from_config(radio)
         schedule = FrameSchedule.from_config(radio)
         beams = BeamSet.from_config(radio)
-        symbols = schedule.window_symbols(beams.orientation, beams.slot)
+        rows = np.arange(len(beams)) if rows is None else np.asarray(rows, dtype=np.int64)
+        symbols = schedule.window_symbols(beams.orientation, beams.slot)[rows]
         cp = num.cp_lengths(symbols)
         longest_delay = radio.hardware_delay_s + (2 * radio.max_range_m + radio.array_baseline_m) / SPEED_OF_LIGHT
-        window = int((cp + num.fft_size).sum(axis=1).max()
+        # the window length depends on the radio only, never on the beam subset
+        all_cp = num.cp_lengths(schedule.window_symbols(beams.orientation, beams.slot))
+        window = int((all_cp + num.fft_size).sum(axis=1).max()
                      + np.ceil(longest_delay * num.sample_rate_hz) + WINDOW_GUARD_SAMPLES)
         pss = pss_grid(radio.pss, radio.n_id2, num.subcarrier_indices())
-        return cls(scene, radio, mode, num, schedule, beams, noise_variance(radio), window, symbols, cp, pss)
+        return cls(scene, radio, mode, num, schedule, beams, rows, noise_variance(radio), window, symbols, cp, pss)
 
     def timing_offset(self) -> int:
         """Grid mode's FFT window timing: ⌊T_H·f_s⌋ samples after each useful part starts."""
         return int(np.floor(self.radio.hardware_delay_s * self.numerology.sample_rate_hz))
 
     def simulate_pose(self, pose_index: int, rng: np.random.Generator) -> Capture:
-        radio, num, beams = self.radio, self.numerology, self.beams
-        pose = self.scene.poses[pose_index]
         # 1. echo paths of this pose by ray casting (delays without the hardware delay)
-        paths = echo_paths(self.scene, pose, radio)
+        paths = echo_paths(self.scene, self.scene.poses[pose_index], self.radio)
+        return self.capture_from_paths(paths, rng, pose_index)
+
+    def capture_from_paths(self, paths: EchoPaths, rng: np.random.Generator, pose_index: int = 0) -> Capture:
+        """The capture of echo paths (over-the-air delays; the hardware delay is added here)."""
+        radio, num = self.radio, self.numerology
         # 2. two-way beam gain ϖ of every path on every beam (eq. (4))
-        gains = beam_path_gains(beams, paths)
+        gains = beam_path_gains(self.beams, paths)[self.rows]
         delays = paths.delay_s + radio.hardware_delay_s
         # 3. what each beam transmits: PSS symbol, then R symbols of random 16-QAM
-        bits = draw_tx_bits(radio, len(beams), rng)
+        n_beams = len(self.rows)
+        bits = draw_tx_bits(radio, n_beams, rng)
         p = num.subcarrier_indices()
-        common = dict(radio=radio, pose_index=pose_index, orientation=beams.orientation,
-                      beam_index=beams.index, beam_angle_rad=beams.angle, ssb_index=beams.slot,
-                      symbol_indices=self.window_symbols, tx_bits=bits)
+        common = dict(radio=radio, pose_index=pose_index, orientation=self.beams.orientation[self.rows],
+                      beam_index=self.beams.index[self.rows], beam_angle_rad=self.beams.angle[self.rows],
+                      ssb_index=self.beams.slot[self.rows], symbol_indices=self.window_symbols, tx_bits=bits)
         if self.mode is CaptureMode.GRID:
             # 4a. resource grid directly, y = H(p)·x + z (eq. (4)), at the receiver's FFT timing
             h = channel_response(gains, delays, p, radio.subcarrier_spacing_hz)
@@ -90,12 +108,12 @@ class Simulator:
             grid = add_noise(h[:, None, :] * qam16_modulate(bits), self.noise_variance, rng)
             return Capture(mode=CaptureMode.GRID, grid=grid, fft_offset_samples=self.timing_offset(), **common)
         # 4b. time-domain windows: every path at its exact fractional delay
-        tx = np.empty((len(beams), 1 + radio.symbols_per_beam, len(p)), dtype=np.complex64)
+        tx = np.empty((n_beams, 1 + radio.symbols_per_beam, len(p)), dtype=np.complex64)
         tx[:, 0] = self.pss_symbol
         tx[:, 1:] = qam16_modulate(bits, np.complex64)
         d_min, _, cumulative = binned_channel_response(gains, delays * num.sample_rate_hz, p,
                                                        radio.subcarrier_spacing_hz, num.sample_rate_hz,
-                                                       row_blocks=radio.orientations)
+                                                       row_blocks=min(radio.orientations, n_beams))
         clean = synthesize_windows(tx, self.window_cp, cumulative, d_min, num, self.window_length)
         # 5. AWGN at the ★ SNR of the reference echo
         return Capture(mode=CaptureMode.WAVEFORM, samples=add_noise(clean, self.noise_variance, rng, inplace=True),

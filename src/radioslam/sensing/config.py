@@ -1,0 +1,49 @@
+"""Receiver settings (paper §III, §IV-A). Options are Enums; a factory builds each stage from these."""
+
+from __future__ import annotations
+
+from enum import Enum
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class Detector(str, Enum):
+    """How targets are picked from each beam's range profile."""
+
+    SINGLE = "single"  # the paper's single target per beam: the strongest peak (§III-A)
+    MULTI = "multi"  # CFAR + successive cancellation on the matched-filter profile (§III-B)
+
+
+class CfarKind(str, Enum):
+    CA = "ca"  # cell averaging
+    OS = "os"  # ordered statistic
+
+
+class Taper(str, Enum):
+    """Window across the active subcarriers before the IFFT."""
+
+    NONE = "none"
+    HANN = "hann"
+
+
+class SensingConfig(BaseModel):
+    """Every receiver parameter. Defaults follow the paper; ranges in metres."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    detector: Detector = Detector.SINGLE
+    peaks: int = Field(3, ge=1, le=16)  # K̂, the IFFT peaks refined per beam (§III-A)
+    precision_m: float = Field(0.001, gt=0)  # bisection stops at this range precision
+    max_iterations: int = Field(20, ge=0, le=40)
+    decimation: int = Field(4, ge=1, le=16)  # PSS synchronization rate f_s/4 (§III-C)
+    min_range_m: float = Field(1.5, ge=0)  # gate: the TX→RX leakage is never a target
+    max_range_m: float | None = Field(None, gt=0)  # None: the radio's max_range_m
+    noise_pfa: float = Field(1e-6, gt=0, lt=1)  # a peak must clear the noise floor at this Pfa
+    point_threshold_db: float | None = Field(None, le=0)  # None: the radio's (−13 dB, §IV-A)
+    cfar: CfarKind = CfarKind.CA
+    cfar_guard: int = Field(3, ge=0)
+    cfar_train: int = Field(16, ge=2)
+    cfar_pfa: float = Field(1e-6, gt=0, lt=1)
+    max_targets: int = Field(3, ge=1, le=16)  # per beam, multi-target mode
+    relax_passes: int = Field(1, ge=0, le=20)  # cyclic re-estimation passes before the joint polish
+    taper: Taper = Taper.NONE

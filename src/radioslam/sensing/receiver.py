@@ -1,0 +1,132 @@
+"""The sensing receiver: one capture (IQ or resource grid) → detections → point cloud.
+
+It works on a :class:`~radioslam.capture.Capture` exactly as it would on a
+recording from hardware and never sees the scene: the hardware delay comes from
+calibration (eq. (11)), not from the radio configuration. Main loop per capture,
+one step per comment (paper §III, §IV-A).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from radioslam.capture import Capture, CaptureMode
+from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
+from radioslam.nr.numerology import Numerology
+from radioslam.sensing.bisection import iterations_for
+from radioslam.sensing.config import Detector, SensingConfig
+from radioslam.sensing.detect import Detections, LagGate, detect_multi, detect_single
+from radioslam.sensing.errors import SensingError
+from radioslam.sensing.estimate import ChannelEstimate, estimate_channel
+from radioslam.sensing.pointcloud import Scan, build_scan
+from radioslam.sensing.profile import RangeSpectrum, mf_spectrum, pdp_spectrum
+from radioslam.sensing.sync import coarse_sync
+
+
+@dataclass(frozen=True)
+class SensingResult:
+    """Everything one capture gave: the scan and the per-beam intermediate results."""
+
+    scan: Scan
+    t1_s: np.ndarray  # (B,) PSS synchronization delay
+    delay_s: np.ndarray  # (B, M) T1 + T2 of each detection (hardware delay included)
+    range_m: np.ndarray  # (B, M)
+    power: np.ndarray  # (B, M) |amplitude|²
+    valid: np.ndarray  # (B, M)
+    profile_power: np.ndarray  # (B, N) |F|² at integer lags (leakage included)
+    profile_range_m: np.ndarray  # (B, N) range of each integer lag
+    dft_evaluations: int
+
+
+class Receiver:
+    """Built from the radio, the calibrated hardware delay (None: not yet known) and settings."""
+
+    def __init__(self, radio: RadioConfig, hardware_delay_s: float | None, cfg: SensingConfig | None = None):
+        self.radio, self.hardware_delay_s, self.cfg = radio, hardware_delay_s, cfg or SensingConfig()
+        num = Numerology.from_config(radio)
+        self.fs, self.n, self.p = num.sample_rate_hz, num.fft_size, num.subcarrier_indices()
+        self.cell_m = SPEED_OF_LIGHT / (2.0 * self.fs)  # 1.22 m per sample
+        self.iterations = iterations_for(self.cfg.precision_m / self.cell_m, self.cfg.max_iterations)
+        self.backoff = int(num.cp_lengths(np.arange(1, 14)).min()) // 2  # FFT window this early
+
+    def _check(self, capture: Capture) -> None:
+        if capture.radio.model_dump(exclude={"snr_db", "hardware_delay_s"}) != self.radio.model_dump(
+                exclude={"snr_db", "hardware_delay_s"}):
+            raise SensingError("radio parameters differ from the receiver's", file=capture.source, field="radio")
+
+    def spectrum(self, est: ChannelEstimate) -> RangeSpectrum:
+        build = mf_spectrum if self.cfg.detector is Detector.MULTI else pdp_spectrum
+        return build(est, self.p, self.n, self.cfg.taper)
+
+    def front_end(self, capture: Capture) -> tuple[np.ndarray, np.ndarray, ChannelEstimate]:
+        """T1 (B,) samples, whether sync was found, and the channel estimate."""
+        self._check(capture)
+        # 1. coarse synchronization on the PSS at f_s/4 (T1)
+        sync = coarse_sync(capture, self.cfg.decimation, self.cfg.noise_pfa)
+        # 2. FFT windows inside every echo's cyclic prefix; LS channel estimate combined over R symbols
+        grid = capture.mode is CaptureMode.GRID
+        offset = sync.t1_samples if grid else sync.t1_samples - self.backoff
+        return sync.t1_samples, sync.found, estimate_channel(capture, offset)
+
+    def gate(self, offset: np.ndarray, low_s: np.ndarray, high_s: np.ndarray) -> LagGate:
+        leak = (np.full(len(offset), np.nan) if self.hardware_delay_s is None else
+                (self.hardware_delay_s + self.radio.array_baseline_m / SPEED_OF_LIGHT) * self.fs - offset)
+        return LagGate(low_s * self.fs - offset, high_s * self.fs - offset, leak)
+
+    def range_gate(self, offset: np.ndarray) -> LagGate:
+        """Lags of ranges in [min_range, max_range] after the calibrated hardware delay."""
+        far = self.cfg.max_range_m or self.radio.max_range_m
+        t_lo, t_hi = (self.hardware_delay_s + bistatic_delay_s(np.array([self.cfg.min_range_m, far]),
+                                                                self.radio.array_baseline_m))
+        return self.gate(offset, np.full(len(offset), t_lo), np.full(len(offset), t_hi))
+
+    def detect(self, spec: RangeSpectrum, gate: LagGate) -> Detections:
+        run = detect_multi if self.cfg.detector is Detector.MULTI else detect_single
+        return run(spec, gate, self.cfg, self.iterations)
+
+    def to_range(self, delay_s: np.ndarray) -> np.ndarray:
+        """Range from T1 + T2 after the calibrated hardware delay (bistatic, eq. (11)'s T_O inverted)."""
+        half_path = 0.5 * SPEED_OF_LIGHT * (delay_s - self.hardware_delay_s)
+        return np.sqrt(np.maximum(half_path**2 - 0.25 * self.radio.array_baseline_m**2, 0.0))
+
+    def sense(self, capture: Capture) -> SensingResult:
+        if self.hardware_delay_s is None:
+            raise SensingError("no hardware delay: run 'radioslam calibrate' first", field="calibration")
+        t1, found, est = self.front_end(capture)
+        # 3. range profile: PDP of Ĥ (single target) or MF with coherent integration (multi)
+        spec = self.spectrum(est)
+        # 4. detection in the range gate, leakage cancelled, peaks refined by bisection (T2)
+        det = self.detect(spec, self.range_gate(est.window_offset))
+        valid = det.valid & found[:, None]
+        delay = (est.window_offset[:, None] + det.lag) / self.fs
+        rng = np.where(valid, self.to_range(np.nan_to_num(delay)), np.nan)
+        power = np.abs(det.amplitude) ** 2
+        # 5. point cloud: normalize by the scan's peak, keep what clears the threshold
+        threshold = self.cfg.point_threshold_db
+        scan = build_scan(rng, power, valid, capture.beam_angle_rad, capture.beam_index, capture.orientation,
+                          self.radio.point_threshold_db if threshold is None else threshold)
+        lags = (np.arange(self.n) + self.n // 2) % self.n - self.n // 2
+        profile_delay = (est.window_offset[:, None] + lags[None, :]) / self.fs
+        return SensingResult(scan, t1 / self.fs, delay, rng, power, valid, np.abs(spec.profile()) ** 2,
+                             self.to_range(profile_delay), det.dft_evaluations)
+
+    # calibration helpers: delays before the hardware delay is known (eq. (11))
+    def delays_of_strongest(self, capture: Capture, row: int) -> float:
+        """T1 + T2 (s) of the strongest refined peak on one beam, no gate."""
+        _, _, est = self.front_end(capture.select([row]))
+        spec = pdp_spectrum(est, self.p, self.n)
+        everywhere = LagGate(np.array([-self.n / 2.0]), np.array([self.n / 2.0]), np.array([np.nan]))
+        det = detect_single(spec, everywhere, self.cfg, self.iterations)
+        return float((est.window_offset[0] + det.lag[0, 0]) / self.fs)
+
+    def gated_delay(self, capture: Capture, row: int, expected_s: float, half_width_s: float):
+        """(T1, T2) in seconds of the strongest echo within ±half_width of ``expected_s``, leakage cancelled."""
+        t1, _, est = self.front_end(capture.select([row]))
+        spec = pdp_spectrum(est, self.p, self.n)
+        gate = self.gate(est.window_offset, np.array([expected_s - half_width_s]),
+                         np.array([expected_s + half_width_s]))
+        det = detect_single(spec, gate, self.cfg, self.iterations)
+        t2 = (est.window_offset[0] + det.lag[0, 0] - t1[0]) / self.fs if det.valid[0, 0] else np.nan
+        return float(t1[0] / self.fs), float(t2)
