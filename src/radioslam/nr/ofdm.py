@@ -37,6 +37,24 @@ def symbol_starts(cp_lengths: np.ndarray, fft_size: int) -> np.ndarray:
     return np.cumsum(lengths, axis=-1) - lengths
 
 
+def phase_ramp(shift: np.ndarray, subcarriers: np.ndarray, period: float) -> np.ndarray:
+    """e^{−j2π·p·shift/period} for shifts (...) and contiguous subcarriers (n_sc,): shape (..., n_sc).
+
+    A delay τ is ``phase_ramp(τ, p, 1/Δf)``, a lag of d samples ``phase_ramp(d, p, N)``.
+    p = p0 + B·a + c factors the exponential into two short ones, so only
+    (A + B) exponentials per shift are evaluated instead of n_sc.
+    """
+    p0, n = int(subcarriers[0]), len(subcarriers)
+    if not np.array_equal(subcarriers, p0 + np.arange(n)):
+        raise ValueError("subcarriers must be contiguous")
+    block = max(1, int(np.sqrt(n)))
+    n_blocks = -(-n // block)
+    w = (-2j * np.pi / period) * np.asarray(shift, dtype=np.float64)[..., None]
+    coarse = np.exp(w * (p0 + block * np.arange(n_blocks)))  # (..., A)
+    fine = np.exp(w * np.arange(block))  # (..., B)
+    return (coarse[..., :, None] * fine[..., None, :]).reshape(*w.shape[:-1], -1)[..., :n]
+
+
 def to_fft_bins(grid: np.ndarray, numerology: Numerology, dtype=np.complex128) -> np.ndarray:
     """Place active-subcarrier values (..., n_sc) into FFT bins (..., N), DC-centred."""
     bins = np.zeros((*grid.shape[:-1], numerology.fft_size), dtype=dtype)
@@ -60,9 +78,11 @@ def demodulate(samples: np.ndarray, window_starts: np.ndarray, numerology: Numer
     """
     n = numerology.fft_size
     starts = np.asarray(window_starts, dtype=np.int64)
-    idx = starts[..., None] + np.arange(n)
     lead = samples.shape[:-1]
-    idx = np.broadcast_to(idx, (*lead, *idx.shape[-2:])) if idx.ndim - 2 < len(lead) else idx
-    windows = np.take_along_axis(samples[..., None, :], idx, axis=-1)
-    spectrum = sfft.fft(windows, axis=-1, norm="ortho")
+    starts = np.broadcast_to(starts, (*lead, starts.shape[-1])) if starts.ndim - 1 < len(lead) else starts
+    # one flat gather of every window: row offset + window start + 0 … N−1
+    row = np.arange(int(np.prod(lead))).reshape(*lead, 1) * samples.shape[-1] if lead else 0
+    idx = (row + starts)[..., None] + np.arange(n)
+    windows = np.take(samples.reshape(-1), idx)
+    spectrum = sfft.fft(windows, axis=-1, norm="ortho", overwrite_x=True, workers=-1)
     return spectrum[..., numerology.fft_bins()]

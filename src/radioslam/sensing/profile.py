@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft as sfft
 
+from radioslam.nr.ofdm import phase_ramp
 from radioslam.sensing.config import Taper
 from radioslam.sensing.estimate import ChannelEstimate
 
@@ -51,13 +52,17 @@ class RangeSpectrum:
 
     def at(self, lags: np.ndarray) -> np.ndarray:
         """F at fractional lags (B, K): one n_sc-term DFT evaluation per entry."""
-        phase = np.exp(2j * np.pi * lags[..., None] * self.p / self.fft_size)
-        return np.einsum("bkp,bp->bk", phase, self.s) / self.scale[:, None]
+        phase = phase_ramp(lags, self.p, self.fft_size)  # e^{−j2πpt/N}; F needs its conjugate
+        return (phase.conj() @ self.s[..., None])[..., 0] / self.scale[:, None]
 
     def path_spectrum(self, lags: np.ndarray, amplitude: np.ndarray) -> np.ndarray:
         """The spectrum (B, n_sc) that paths (B, K) of the given lags and amplitudes put in S."""
-        phase = np.exp(-2j * np.pi * lags[..., None] * self.p / self.fft_size)
-        return np.einsum("bk,bkp->bp", amplitude, phase) * self.model
+        phase = phase_ramp(lags, self.p, self.fft_size)
+        return (amplitude[:, None, :] @ phase)[:, 0] * self.model
+
+    def rows(self, mask: np.ndarray) -> "RangeSpectrum":
+        """The beams selected by a boolean mask (B,)."""
+        return RangeSpectrum(self.s[mask], self.model[mask], self.p, self.fft_size)
 
     def minus(self, spectrum: np.ndarray) -> "RangeSpectrum":
         """The residual after cancelling ``spectrum`` (successive cancellation)."""
@@ -73,7 +78,7 @@ def pdp_spectrum(est: ChannelEstimate, p: np.ndarray, fft_size: int, taper: Tape
 def mf_spectrum(est: ChannelEstimate, p: np.ndarray, fft_size: int, taper: Taper = Taper.NONE) -> RangeSpectrum:
     """Matched filter with coherent integration, spectrum Z = Σ_q y_q x_q* (paper §III-B)."""
     t = taper_weights(taper, len(p))
-    return RangeSpectrum(est.z * t, est.w * t, p, fft_size)
+    return RangeSpectrum(est.z.astype(np.complex128) * t, est.w * t, p, fft_size)
 
 
 def signed_lag(lag: np.ndarray, fft_size: int) -> np.ndarray:

@@ -9,24 +9,13 @@ from __future__ import annotations
 import numpy as np
 
 from radioslam.antenna.codebook import BeamSet
+from radioslam.nr.ofdm import phase_ramp
 from radioslam.sim.paths import EchoPaths, PathKind
 
 
 def delay_phasors(delays_s: np.ndarray, subcarriers: np.ndarray, spacing_hz: float) -> np.ndarray:
-    """e^{−j2π p Δf τ} for delays (P,) and contiguous subcarriers (n_sc,): shape (P, n_sc).
-
-    p = p0 + B·a + c factors the exponential into two short ones, so only
-    P·(A + B) complex exponentials are evaluated instead of P·n_sc.
-    """
-    p0, n = int(subcarriers[0]), len(subcarriers)
-    if not np.array_equal(subcarriers, p0 + np.arange(n)):
-        raise ValueError("subcarriers must be contiguous")
-    block = max(1, int(np.sqrt(n)))
-    n_blocks = -(-n // block)
-    w = -2j * np.pi * spacing_hz * np.asarray(delays_s, dtype=np.float64)[:, None]
-    coarse = np.exp(w * (p0 + block * np.arange(n_blocks)))  # (P, A)
-    fine = np.exp(w * np.arange(block))  # (P, B)
-    return (coarse[:, :, None] * fine[:, None, :]).reshape(len(delays_s), -1)[:, :n]
+    """e^{−j2π p Δf τ} for delays (P,) and contiguous subcarriers (n_sc,): shape (P, n_sc)."""
+    return phase_ramp(delays_s, subcarriers, 1.0 / spacing_hz)
 
 
 def beam_path_gains(beams: BeamSet, paths: EchoPaths) -> np.ndarray:
