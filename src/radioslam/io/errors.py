@@ -9,3 +9,11 @@ class SigMFError(RadioslamError):
 
 class TumError(RadioslamError):
     """A TUM trajectory file that cannot be parsed."""
+
+
+class PlyError(RadioslamError):
+    """A PLY point cloud that is missing or malformed."""
+
+
+class CalibrationFileError(RadioslamError):
+    """A calibration.json that is missing or malformed."""

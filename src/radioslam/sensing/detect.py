@@ -181,8 +181,9 @@ def _with_leakage(spec: RangeSpectrum, gate: LagGate, slots: int):
     return lag, amp, present, fixed
 
 
-def detect_single(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, iterations: int) -> Detections:
-    """The strongest refined peak per beam in the gate (paper §III-A), leakage cancelled."""
+def pdp_peaks(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, iterations: int):
+    """Leakage estimated and cancelled, then the K̂ largest local maxima in the gate that clear
+    the noise floor, each refined by bisection. Returns (paths, refined peaks (B, K̂), exist (B, K̂))."""
     lag, amp, present, fixed = _with_leakage(spec, gate, 1)
     resid = spec.minus(spec.path_spectrum(np.nan_to_num(lag[:, :1]), amp[:, :1]))
     profile = resid.profile()
@@ -191,6 +192,12 @@ def detect_single(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, iterat
     floor = noise_floor(power)[:, None] * np.log(n / cfg.noise_pfa)
     peaks, ok = strongest(power, local_maxima(power) & gate.mask(n) & (power > floor), cfg.peaks)
     refined = bisect_peaks(resid, signed_lag(peaks, n), neighbour_values(profile, peaks), iterations)
+    return (lag, amp, present, fixed), refined, ok
+
+
+def detect_single(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, iterations: int) -> Detections:
+    """The strongest refined peak per beam in the gate (paper §III-A), leakage cancelled jointly."""
+    (lag, amp, present, fixed), refined, ok = pdp_peaks(spec, gate, cfg, iterations)
     score = np.where(ok, np.abs(refined.amplitude), -1.0)
     best = np.argmax(score, axis=1)
     rows = np.arange(len(best))

@@ -25,6 +25,11 @@ from radioslam.sensing.profile import RangeSpectrum, mf_spectrum, pdp_spectrum
 from radioslam.sensing.sync import coarse_sync
 
 
+# the radio parameters the receiver's processing depends on
+RECEIVER_FIELDS = ("fft_size", "n_subcarriers", "subcarrier_spacing_hz", "symbols_per_frame", "frames", "pss",
+                   "n_id2", "array_baseline_m")
+
+
 @dataclass(frozen=True)
 class SensingResult:
     """Everything one capture gave: the scan and the per-beam intermediate results."""
@@ -52,9 +57,10 @@ class Receiver:
         self.backoff = int(num.cp_lengths(np.arange(1, 14)).min()) // 2  # FFT window this early
 
     def _check(self, capture: Capture) -> None:
-        if capture.radio.model_dump(exclude={"snr_db", "hardware_delay_s"}) != self.radio.model_dump(
-                exclude={"snr_db", "hardware_delay_s"}):
-            raise SensingError("radio parameters differ from the receiver's", file=capture.source, field="radio")
+        for name in RECEIVER_FIELDS:
+            if getattr(capture.radio, name) != getattr(self.radio, name):
+                raise SensingError(f"{getattr(capture.radio, name)} differs from the receiver's "
+                                   f"{getattr(self.radio, name)}", file=capture.source, field=f"radio.{name}")
 
     def spectrum(self, est: ChannelEstimate) -> RangeSpectrum:
         build = mf_spectrum if self.cfg.detector is Detector.MULTI else pdp_spectrum

@@ -1,0 +1,1 @@
+"""Evaluation: bounds, metrics and the paper's experiments (pure computation; figures live in viz)."""

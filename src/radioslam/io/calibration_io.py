@@ -1,0 +1,34 @@
+"""``calibration.json``: the hardware-delay estimate of eq. (11) and the targets it used."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from radioslam.io.atomic import atomic_write_text
+from radioslam.io.errors import CalibrationFileError
+from radioslam.sensing.calibration import Calibration, CalibrationTarget
+
+
+def write_calibration(path: str | Path, calibration: Calibration) -> None:
+    atomic_write_text(path, json.dumps(calibration.to_dict(), indent=2) + "\n")
+
+
+def read_calibration(path: str | Path) -> Calibration:
+    path = Path(path)
+    if not path.exists():
+        raise CalibrationFileError("no such file; run 'radioslam calibrate' (or 'simulate') first",
+                                   file=path, field="(file)")
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise CalibrationFileError(f"not valid JSON: {exc}", file=path, field="(document)") from None
+    delay = doc.get("hardware_delay_s") if isinstance(doc, dict) else None
+    if not isinstance(delay, (int, float)) or isinstance(delay, bool) or not 0 <= delay < 1e-3:
+        raise CalibrationFileError("must be a number of seconds in [0, 1 ms)", file=path, field="hardware_delay_s")
+    try:
+        targets = [CalibrationTarget(float(t["range_m"]), float(t["t1_s"]), float(t["t2_s"]), float(t["ota_s"]))
+                   for t in doc.get("targets", [])]
+    except (KeyError, TypeError, ValueError) as exc:
+        raise CalibrationFileError(f"malformed target: {exc}", file=path, field="targets") from None
+    return Calibration(float(delay), targets, str(doc.get("source", "")))

@@ -1,0 +1,52 @@
+"""Point clouds as PLY (binary little endian) through ``plyfile``.
+
+A scan is one ``vertex`` element with x, y, z (terminal frame, z = 0), power_db
+(relative to the scan's strongest return), beam (codebook index i), orientation
+(k) and range_m (DESIGN.md §5). A map adds nothing else; its x, y are world frame.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from plyfile import PlyData, PlyElement
+
+from radioslam.io.atomic import atomic_path
+from radioslam.io.errors import PlyError
+from radioslam.sensing.pointcloud import Scan
+
+VERTEX_DTYPE = [("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("power_db", "<f4"), ("beam", "<i2"),
+                ("orientation", "<u1"), ("range_m", "<f8")]
+
+
+def write_scan(path: str | Path, scan: Scan, comment: str = "") -> None:
+    """Write a scan (atomically); an empty scan is a valid file with zero vertices."""
+    vertices = np.empty(len(scan), dtype=VERTEX_DTYPE)
+    xy = scan.xy
+    vertices["x"], vertices["y"], vertices["z"] = xy[:, 0], xy[:, 1], 0.0
+    vertices["power_db"], vertices["beam"] = scan.power_db, scan.beam
+    vertices["orientation"], vertices["range_m"] = scan.orientation, scan.range_m
+    data = PlyData([PlyElement.describe(vertices, "vertex")], text=False, byte_order="<",
+                   comments=[c for c in [comment] if c])
+    with atomic_path(path) as tmp:
+        data.write(str(tmp))
+
+
+def read_scan(path: str | Path) -> Scan:
+    """Read a scan written by :func:`write_scan` (angle from x, y)."""
+    path = Path(path)
+    if not path.exists():
+        raise PlyError("no such file", file=path, field="(file)")
+    try:
+        vertex = PlyData.read(str(path))["vertex"].data
+    except (KeyError, ValueError, EOFError, OSError) as exc:
+        raise PlyError(f"not a readable PLY point cloud: {exc}", file=path, field="vertex") from None
+    missing = [name for name, _ in VERTEX_DTYPE if name not in vertex.dtype.names]
+    if missing:
+        raise PlyError("missing vertex property", file=path, field=f"vertex.{missing[0]}")
+    x, y = np.asarray(vertex["x"], float), np.asarray(vertex["y"], float)
+    if not (np.isfinite(x).all() and np.isfinite(y).all()):
+        raise PlyError("non-finite coordinates", file=path, field="vertex.x")
+    return Scan(np.asarray(vertex["range_m"], float), np.arctan2(y, x), np.asarray(vertex["power_db"], float),
+                np.asarray(vertex["beam"], np.int64), np.asarray(vertex["orientation"], np.int64))
