@@ -82,7 +82,7 @@ def simulate(
     snr_db: Optional[float] = typer.Option(None, "--snr-db", help="per-RE SNR of the reference echo, dB"),
     save_iq: bool = typer.Option(False, "--save-iq", help="write SigMF captures/NNNN.sigmf-{meta,data}"),
 ) -> None:
-    """Simulate a scene: scene.yaml, ground_truth.tum and, with --save-iq, SigMF captures."""
+    """Simulate a scene: scene.yaml, ground_truth.tum, calibration.json and, with --save-iq, SigMF captures."""
     from radioslam.io import write_capture, write_tum
     from radioslam.io.atomic import atomic_write_text
     from radioslam.io.rundir import RunDir
@@ -95,6 +95,8 @@ def simulate(
     run.clear_captures()  # a run directory never mixes recordings of two runs
     atomic_write_text(run.scene, scene_to_yaml(loaded))
     write_tum(run.ground_truth, run.pose_timestamps(len(loaded.poses)), loaded.poses)
+    # calibration.json: eq. (11) on plate targets simulated with this scene's radio
+    _calibrate_simulated(loaded.radio, run.calibration, seed, None, None)
     if save_iq:
         sim = Simulator.from_scene(loaded)
         with progress() as bar:
@@ -104,6 +106,142 @@ def simulate(
                 bar.advance(task)
     err.print(f"wrote {run.root} ({len(loaded.poses)} poses{', IQ captures' if save_iq else ''})",
               markup=False)
+
+
+def _calibrate_simulated(radio, out: Path, seed: int, targets: int | None, spacing: float | None):
+    from radioslam.io import write_calibration
+    from radioslam.sensing import estimate_hardware_delay
+    from radioslam.sim.calibration_targets import calibration_ranges, simulate_calibration_captures
+
+    ranges = calibration_ranges(radio, targets, spacing)
+    captures = simulate_calibration_captures(radio, ranges, seed)
+    cal = estimate_hardware_delay(captures, ranges, source=f"simulated: {len(ranges)} metal plates, seed {seed}")
+    write_calibration(out, cal)
+    return cal
+
+
+@app.command()
+@one_line_errors
+def calibrate(
+    scene: Optional[str] = typer.Argument(None, help="scene whose radio to use (default: the paper's defaults)"),
+    out: Path = typer.Option(..., "--out", help="calibration JSON to write"),
+    targets: Optional[int] = typer.Option(None, "--targets", min=1, help="number of targets N_T (default 16)"),
+    spacing: Optional[float] = typer.Option(None, "--spacing", min=0.05, help="target spacing, m (default 0.8)"),
+    captures: Optional[Path] = typer.Option(None, "--captures", help="directory of recorded target captures"),
+    ranges: Optional[str] = typer.Option(None, "--ranges", help="their ranges, m, comma separated, in file order"),
+    seed: int = typer.Option(0, "--seed", min=0, help="seed of the simulated measurements"),
+) -> None:
+    """Estimate the hardware delay T_H from targets at known ranges, eq. (11)."""
+    from radioslam.config import RadioConfig
+    from radioslam.io import read_capture, write_calibration
+    from radioslam.scene import load_scene
+    from radioslam.sensing import estimate_hardware_delay
+
+    if captures is None:
+        radio = load_scene(scene).radio if scene else RadioConfig()
+        cal = _calibrate_simulated(radio, out, seed, targets, spacing)
+    else:
+        files = _capture_files(captures)
+        values = _parse_ranges(ranges, len(files))
+        cal = estimate_hardware_delay([read_capture(f) for f in files], values, source=f"recorded: {captures}")
+        write_calibration(out, cal)
+    err.print(f"T_H = {cal.hardware_delay_s * 1e6:.6f} µs from {len(cal.targets)} targets → {out}", markup=False)
+
+
+def _capture_files(directory: Path) -> list[Path]:
+    from radioslam.errors import RadioslamError
+
+    if not directory.is_dir():
+        raise RadioslamError("no such directory", file=directory, field="(directory)")
+    files = sorted(directory.glob("*.sigmf-meta"))
+    if not files:
+        raise RadioslamError("no SigMF captures (*.sigmf-meta); run 'radioslam simulate --save-iq'",
+                             file=directory, field="(directory)")
+    return files
+
+
+def _parse_ranges(text: Optional[str], count: int):
+    import numpy as np
+
+    from radioslam.errors import RadioslamError
+
+    if not text:
+        raise RadioslamError("--ranges is required with --captures", file="(command line)", field="--ranges")
+    try:
+        values = np.array([float(v) for v in text.split(",")])
+    except ValueError:
+        raise RadioslamError(f"not a comma-separated list of numbers: {text!r}", file="(command line)",
+                             field="--ranges") from None
+    if len(values) != count or not np.all(np.isfinite(values)) or np.any(values <= 0):
+        raise RadioslamError(f"need {count} positive ranges, one per capture", file="(command line)", field="--ranges")
+    return values
+
+
+@app.command()
+@one_line_errors
+def sense(
+    run_dir: Path = typer.Argument(..., help="run directory with captures/ (from 'simulate --save-iq')"),
+    calibration: Optional[Path] = typer.Option(None, "--calibration", help="default: DIR/calibration.json"),
+    detector: str = typer.Option("single", "--detector", help="single (the paper's) or multi (CFAR + cancellation)"),
+    threshold_db: Optional[float] = typer.Option(None, "--threshold-db", max=0.0,
+                                                 help="point threshold re. the scan peak (default −13)"),
+    plot_pose: int = typer.Option(0, "--plot-pose", help="pose whose heatmap and cloud to draw; −1: none"),
+) -> None:
+    """Turn SigMF captures into point clouds: DIR/scans/NNNN.ply."""
+    from radioslam.errors import RadioslamError
+    from radioslam.io import read_calibration, read_capture, write_scan
+    from radioslam.io.rundir import RunDir
+    from radioslam.sensing import Detector, Receiver, SensingConfig
+
+    run = RunDir(run_dir)
+    cal = read_calibration(calibration or run.calibration)
+    try:
+        cfg = SensingConfig(detector=Detector(detector), point_threshold_db=threshold_db)
+    except ValueError:
+        raise RadioslamError("must be 'single' or 'multi'", file="(command line)", field="--detector") from None
+    files = _capture_files(run.captures)
+    receiver = None
+    with progress() as bar:
+        task = bar.add_task("sensing", total=len(files))
+        for f in files:
+            capture = read_capture(f)
+            receiver = receiver or Receiver(capture.radio, cal.hardware_delay_s, cfg)
+            result = receiver.sense(capture)
+            write_scan(run.scans / f"{capture.pose_index:04d}.ply", result.scan, comment=f"pose {capture.pose_index}")
+            if capture.pose_index == plot_pose:
+                from radioslam.viz.figures import polar_heatmap_and_points
+
+                polar_heatmap_and_points(run.scans / f"{capture.pose_index:04d}.png", capture.beam_angle_rad,
+                                         result.profile_range_m, result.profile_power, result.scan.xy,
+                                         result.scan.power_db)
+            bar.advance(task)
+    err.print(f"wrote {len(files)} scans to {run.scans}", markup=False)
+
+
+@app.command()
+@one_line_errors
+def reproduce(
+    experiment: str = typer.Argument(..., help="table1, fig5, fig8 or all"),
+    out: Path = typer.Option(..., "--out", help="directory for the figure (PNG) and table (CSV, Markdown)"),
+    json_out: bool = typer.Option(False, "--json", help="print one JSON object of the results on stdout"),
+    seed: int = typer.Option(0, "--seed", min=0),
+    trials: Optional[int] = typer.Option(None, "--trials", min=1, help="Monte Carlo trials (default per experiment)"),
+) -> None:
+    """Reproduce the paper's experiments: Table I, Fig. 5, Fig. 8."""
+    import json
+
+    from radioslam.errors import RadioslamError
+    from radioslam.eval.experiments.reproduce import EXPERIMENTS, run_experiment
+
+    names = list(EXPERIMENTS) if experiment == "all" else [experiment]
+    if any(n not in EXPERIMENTS for n in names):
+        raise RadioslamError(f"unknown experiment {experiment!r} (known: {', '.join(EXPERIMENTS)}, all)",
+                             file="(command line)", field="EXPERIMENT")
+    out.mkdir(parents=True, exist_ok=True)
+    results = {n: run_experiment(n, out, seed, trials) for n in names}
+    if json_out:
+        typer.echo(json.dumps(results[names[0]] if len(names) == 1 else results))
+    err.print(f"wrote {', '.join(names)} to {out}", markup=False)
 
 
 def main() -> None:

@@ -26,7 +26,6 @@ from radioslam.sensing.cfar import cfar_threshold
 from radioslam.sensing.config import SensingConfig
 from radioslam.sensing.profile import RangeSpectrum, signed_lag
 
-
 POLISH_STEPS = 4
 NEAR_CELLS = 3.0
 
@@ -119,9 +118,10 @@ def relax(spec: RangeSpectrum, lag: np.ndarray, amp: np.ndarray, present: np.nda
 def polish(spec: RangeSpectrum, lag: np.ndarray, present: np.ndarray, fixed: np.ndarray,
            iterations: int) -> tuple[np.ndarray, np.ndarray]:
     """Joint Gauss–Newton refinement of all movable lags (B, M), amplitudes by least squares
-    at every step (variable projection). Minimizes Σ_p |S − Σ_k a_k m e_k|² / m, the ML cost
-    of the model, with Kaufman's projected Jacobian; steps are clipped to ±0.25 sample. Converges where cyclic RELAX crawls:
-    paths closer than one range cell (the leakage next to a near target, Fig. 8's pair).
+    at every step (variable projection, Kaufman's projected Jacobian). Minimizes
+    Σ_p |S − Σ_k a_k m e_k|² / m, the ML cost of the model; steps are clipped to ±0.25 sample.
+    Converges where cyclic RELAX crawls: paths closer than one range cell (the leakage next
+    to a near target, Fig. 8's pair).
     """
     lag = lag.copy()
     movable = present & ~fixed[None, :]

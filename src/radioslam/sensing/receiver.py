@@ -24,7 +24,6 @@ from radioslam.sensing.pointcloud import Scan, build_scan
 from radioslam.sensing.profile import RangeSpectrum, mf_spectrum, pdp_spectrum
 from radioslam.sensing.sync import coarse_sync
 
-
 # the radio parameters the receiver's processing depends on
 RECEIVER_FIELDS = ("fft_size", "n_subcarriers", "subcarrier_spacing_hz", "symbols_per_frame", "frames", "pss",
                    "n_id2", "array_baseline_m")

@@ -1,0 +1,51 @@
+"""Runs an experiment and writes its figure and table (the I/O side of ``radioslam reproduce``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from radioslam.eval.experiments.fig5 import MODES, run_fig5
+from radioslam.eval.experiments.fig8 import RANGES_M, run_fig8
+from radioslam.eval.experiments.table1 import run_table1
+from radioslam.io.tables import write_table
+
+
+def _table1(out: Path, seed: int, trials: int | None) -> dict:
+    from radioslam.viz.figures import table1_figure
+
+    r = run_table1(trials=trials or 50, seed=seed)
+    write_table(out / "table1", ["range_m", "err_ifft_m", "err_bisection_m"],
+                [[float(a), float(b), float(c)] for a, b, c in zip(r.ranges_m, r.err_ifft_m, r.err_bisection_m)])
+    write_table(out / "table1_crb", ["snr_db", "rmse_bisection_m", "crb_m", "ratio"],
+                [[float(s), float(e), float(c), float(e / c)] for s, e, c in zip(r.crb_snr_db, r.crb_rmse_m, r.crb_m)])
+    table1_figure(out / "table1.png", r)
+    return r.to_json()
+
+
+def _fig5(out: Path, seed: int, trials: int | None) -> dict:
+    from radioslam.viz.figures import fig5_figure
+
+    r = run_fig5(trials=trials or 30, seed=seed)
+    rows = [[float(s)] + [float(r.peak_sidelobe_db[m][i]) for m in MODES] + [float(r.mean_sidelobe_db[m][i])
+                                                                             for m in MODES]
+            for i, s in enumerate(r.snr_db)]
+    write_table(out / "fig5", ["snr_db"] + [f"peak_{m}_db" for m in MODES] + [f"mean_{m}_db" for m in MODES], rows)
+    fig5_figure(out / "fig5.png", r)
+    return r.to_json()
+
+
+def _fig8(out: Path, seed: int, trials: int | None) -> dict:
+    from radioslam.viz.figures import fig8_figure
+
+    r = run_fig8(trials=trials or 100, seed=seed)
+    write_table(out / "fig8", ["method", "detect_rate_9m"],
+                [["PDP peaks", r.detect_rate_pdp], ["MF + successive cancellation", r.detect_rate_mf]])
+    fig8_figure(out / "fig8.png", r, RANGES_M)
+    return r.to_json()
+
+
+EXPERIMENTS = {"table1": _table1, "fig5": _fig5, "fig8": _fig8}
+
+
+def run_experiment(name: str, out: Path, seed: int, trials: int | None) -> dict:
+    return EXPERIMENTS[name](out, seed, trials)

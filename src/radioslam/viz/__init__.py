@@ -1,0 +1,1 @@
+"""Figures (matplotlib, Agg backend). Nothing in the numerical core imports this package."""
