@@ -39,7 +39,10 @@ class SensingConfig(BaseModel):
     min_range_m: float = Field(1.5, ge=0)  # gate: the TX→RX leakage is never a target
     max_range_m: float | None = Field(None, gt=0)  # None: the radio's max_range_m
     noise_pfa: float = Field(1e-6, gt=0, lt=1)  # a peak must clear the noise floor at this Pfa
-    point_threshold_db: float | None = Field(None, le=0)  # None: the radio's (−13 dB, §IV-A)
+    point_threshold_db: float | None = Field(None, le=0)  # None: the radio's (−13 dB, §IV-A) for single,
+    # and for multi this one: cancellation removes range sidelobes and CFAR bounds false alarms, so the
+    # threshold only has to reject beam sidelobes (two-way −25.6 dB) while keeping targets behind glass
+    multi_threshold_db: float = Field(-25.0, le=0)
     cfar: CfarKind = CfarKind.CA
     cfar_guard: int = Field(3, ge=0)
     cfar_train: int = Field(16, ge=2)

@@ -91,6 +91,11 @@ class Receiver:
         run = detect_multi if self.cfg.detector is Detector.MULTI else detect_single
         return run(spec, gate, self.cfg, self.iterations)
 
+    def point_threshold_db(self) -> float:
+        if self.cfg.point_threshold_db is not None:
+            return self.cfg.point_threshold_db
+        return self.cfg.multi_threshold_db if self.cfg.detector is Detector.MULTI else self.radio.point_threshold_db
+
     def to_range(self, delay_s: np.ndarray) -> np.ndarray:
         """Range from T1 + T2 after the calibrated hardware delay (bistatic, eq. (11)'s T_O inverted)."""
         half_path = 0.5 * SPEED_OF_LIGHT * (delay_s - self.hardware_delay_s)
@@ -109,9 +114,8 @@ class Receiver:
         rng = np.where(valid, self.to_range(np.nan_to_num(delay)), np.nan)
         power = np.abs(det.amplitude) ** 2
         # 5. point cloud: normalize by the scan's peak, keep what clears the threshold
-        threshold = self.cfg.point_threshold_db
         scan = build_scan(rng, power, valid, capture.beam_angle_rad, capture.beam_index, capture.orientation,
-                          self.radio.point_threshold_db if threshold is None else threshold)
+                          self.point_threshold_db())
         lags = (np.arange(self.n) + self.n // 2) % self.n - self.n // 2
         profile_delay = (est.window_offset[:, None] + lags[None, :]) / self.fs
         return SensingResult(scan, t1 / self.fs, delay, rng, power, valid, np.abs(spec.profile()) ** 2,

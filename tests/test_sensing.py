@@ -1,0 +1,144 @@
+"""Sensing: T1/T2 against 2R/c + T_H, bisection precision and cost, calibration (eq. 11),
+the CRB, Fig. 5/8 physics, multi-target detection on glass-door, and bad input."""
+
+import numpy as np
+import pytest
+
+from radioslam.capture import CaptureMode
+from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
+from radioslam.eval.point_targets import capture_point_targets, nearest_beam, point_paths
+from radioslam.scene import load_scene
+from radioslam.sensing import Detector, Receiver, SensingConfig, estimate_hardware_delay
+from radioslam.sensing.bisection import bisect_peaks, iterations_for, neighbour_values
+from radioslam.sensing.cfar import cfar_threshold
+from radioslam.sensing.config import CfarKind
+from radioslam.sensing.profile import RangeSpectrum
+from radioslam.sensing.sync import coarse_sync
+from radioslam.sim import Simulator
+from radioslam.sim.calibration_targets import calibration_ranges, simulate_calibration_captures
+
+RADIO = RadioConfig()
+FS = RADIO.sample_rate_hz
+
+
+def plate_capture(r, seed=0, mode=CaptureMode.WAVEFORM, **radio):
+    scene = load_scene(f"single-plate:{r}").with_radio(**radio)
+    return scene, Simulator.from_scene(scene, mode, rows=[RADIO.beams_per_side]).simulate_pose(
+        0, np.random.default_rng(seed))
+
+
+@pytest.mark.parametrize("r", [2.4, 7.2, 12.8])
+def test_t1_and_t2_add_up_to_the_echo_delay(r):
+    scene, cap = plate_capture(r)
+    rx = Receiver(scene.radio, scene.radio.hardware_delay_s, SensingConfig(min_range_m=0.3))
+    res = rx.sense(cap)
+    truth = scene.radio.hardware_delay_s + bistatic_delay_s(r, scene.radio.array_baseline_m)
+    # T1 alone is on the 4-sample grid, at the strongest PSS arrival: the plate, or at 12.8 m
+    # the equally strong TX→RX leakage at T_H
+    arrivals = np.array([truth, scene.radio.hardware_delay_s])
+    assert np.min(np.abs(res.t1_s[0] - arrivals)) * FS <= 2.5
+    # T1 + T2 is the echo delay 2R/c + T_H to picoseconds (millimetres of range; 3σ at 12.8 m)
+    assert abs(res.delay_s[0, 0] - truth) < 2 * 6e-3 / SPEED_OF_LIGHT
+    assert abs(res.range_m[0, 0] - r) < 6e-3
+
+
+def test_sync_finds_thousands_of_samples_of_hardware_delay():
+    _, cap = plate_capture(4.0, hardware_delay_s=50e-6)
+    sync = coarse_sync(cap)
+    assert sync.found.all()
+    assert abs(sync.t1_samples[0] - 50e-6 * FS) <= 2 + 4.0 * 2 / SPEED_OF_LIGHT * FS
+
+
+def test_grid_and_waveform_modes_give_the_same_range():
+    scene, wave = plate_capture(5.6, seed=3)
+    _, grid = plate_capture(5.6, seed=3, mode=CaptureMode.GRID)
+    rx = Receiver(scene.radio, scene.radio.hardware_delay_s)
+    assert abs(rx.sense(wave).range_m[0, 0] - rx.sense(grid).range_m[0, 0]) < 2e-3
+
+
+@pytest.mark.parametrize("precision", [0.1, 0.01, 0.001])
+def test_bisection_reaches_its_precision_and_counts_its_dft_evaluations(precision):
+    p, n = np.arange(-396, 396), 1024
+    truth = np.random.default_rng(0).uniform(2, 40, size=64)
+    spec = RangeSpectrum(np.exp(-2j * np.pi * truth[:, None] * p / n), np.ones((64, len(p))), p, n)
+    profile = spec.profile()
+    peaks = np.argmax(np.abs(profile), axis=1)[:, None]
+    steps = iterations_for(precision, 40)
+    out = bisect_peaks(spec, peaks, neighbour_values(profile, peaks), steps)
+    assert np.abs(out.lag[:, 0] - truth).max() <= 2.0**-steps
+    assert out.dft_evaluations == steps * 64
+    assert np.all(np.abs(out.amplitude) > 0.98) and np.all(np.abs(out.amplitude) < 1 + 1e-9)
+
+
+def test_calibration_recovers_the_hardware_delay_within_a_nanosecond():
+    radio = RADIO.model_copy(update={"hardware_delay_s": 27.3e-6})
+    ranges = calibration_ranges(radio)
+    cal = estimate_hardware_delay(simulate_calibration_captures(radio, ranges, seed=5), ranges)
+    assert abs(cal.hardware_delay_s - 27.3e-6) < 1e-9
+    assert abs(cal.hardware_delay_s - 27.3e-6) < 20e-12  # in fact to picoseconds
+    assert len(cal.targets) == 16 and cal.targets[0].range_m == pytest.approx(0.8)
+
+
+def test_receiver_uses_the_calibrated_delay_not_the_configured_one():
+    scene, cap = plate_capture(6.4)
+    off = Receiver(scene.radio, scene.radio.hardware_delay_s + 1e-9, SensingConfig(min_range_m=0.3)).sense(cap)
+    assert off.range_m[0, 0] == pytest.approx(6.4 - 0.5 * SPEED_OF_LIGHT * 1e-9, abs=3e-3)
+
+
+def test_empty_beams_give_no_points_and_never_range_zero():
+    paths = point_paths(RADIO, 6.0, 0.0, 10.0)
+    rows = list(range(188))
+    cap = capture_point_targets(RADIO, paths, rows, np.random.default_rng(1))
+    res = Receiver(RADIO, RADIO.hardware_delay_s).sense(cap)
+    behind = np.abs(np.angle(np.exp(1j * (cap.beam_angle_rad - np.pi)))) < np.pi / 4
+    assert not res.valid[behind].any()  # only noise and leakage there
+    assert len(res.scan) > 0 and (res.scan.range_m >= 1.5).all()
+    assert np.all(np.abs(res.scan.range_m - 6.0) < 0.05)
+
+
+def test_cfar_false_alarm_rate_matches_its_design():
+    rng = np.random.default_rng(0)
+    noise = rng.exponential(size=(400, 1024))
+    for kind in CfarKind:
+        rate = np.mean(noise > cfar_threshold(noise, kind, 2, 16, 1e-3))
+        assert 0.5e-3 < rate < 2e-3, (kind, rate)
+
+
+def test_multi_target_mode_finds_the_glass_door_and_the_wall_behind_it():
+    scene = load_scene("glass-door")
+    cap = Simulator.from_scene(scene).simulate_pose(0, np.random.default_rng(0))
+    scan = Receiver(scene.radio, scene.radio.hardware_delay_s, SensingConfig(detector=Detector.MULTI)).sense(cap).scan
+    xy = scan.xy
+    ahead = np.abs(scan.angle_rad) < np.radians(20)
+    door, wall = ahead & (xy[:, 0] < 8), ahead & (xy[:, 0] > 12)
+    assert door.sum() >= 5 and wall.sum() >= 5
+    seg = scene.segments
+
+    def distance_to_walls(points):
+        a, d = seg[:, 0], seg[:, 1] - seg[:, 0]
+        t = np.clip(np.einsum("psk,sk->ps", points[:, None] - a, d) / np.einsum("sk,sk->s", d, d), 0, 1)
+        return np.min(np.linalg.norm(points[:, None] - (a + t[..., None] * d), axis=2), axis=1)
+
+    assert distance_to_walls(xy[door | wall]).max() < 0.3
+    single = Receiver(scene.radio, scene.radio.hardware_delay_s).sense(cap).scan
+    assert not ((np.abs(single.angle_rad) < np.radians(20)) & (single.xy[:, 0] > 12)).any()
+
+
+def test_fig8_matched_filter_resolves_the_weak_target_the_pdp_misses():
+    from radioslam.eval.experiments.fig8 import run_fig8
+
+    r = run_fig8(trials=20, seed=4)
+    assert r.detect_rate_mf >= 0.95 and r.detect_rate_pdp < r.detect_rate_mf
+
+
+def test_fig5_different_data_lowers_sidelobes_identical_does_not():
+    from radioslam.eval.experiments.fig5 import run_fig5
+
+    r = run_fig5(snr_db=(10.0, 20.0), trials=8, seed=1)
+    assert r.peak_sidelobe_db["different"][0] <= r.peak_sidelobe_db["single"][0] - 4
+    assert r.peak_sidelobe_db["single"][1] - r.peak_sidelobe_db["identical"][1] <= 1.5
+
+
+def test_nearest_beam_points_at_the_bearing():
+    assert np.degrees(Simulator.from_radio(RADIO).beams.angle[nearest_beam(RADIO, np.pi / 4)]) == pytest.approx(
+        45, abs=1.0)
