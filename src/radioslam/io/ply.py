@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from plyfile import PlyData, PlyElement
+from plyfile import PlyData, PlyElement, PlyParseError
 
 from radioslam.io.atomic import atomic_path
 from radioslam.io.errors import PlyError
@@ -40,7 +40,7 @@ def read_scan(path: str | Path) -> Scan:
         raise PlyError("no such file", file=path, field="(file)")
     try:
         vertex = PlyData.read(str(path))["vertex"].data
-    except (KeyError, ValueError, EOFError, OSError) as exc:
+    except (KeyError, ValueError, EOFError, OSError, PlyParseError) as exc:
         raise PlyError(f"not a readable PLY point cloud: {exc}", file=path, field="vertex") from None
     missing = [name for name, _ in VERTEX_DTYPE if name not in vertex.dtype.names]
     if missing:
