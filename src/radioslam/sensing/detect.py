@@ -28,6 +28,7 @@ from radioslam.sensing.profile import RangeSpectrum, signed_lag
 
 POLISH_STEPS = 4
 NEAR_CELLS = 3.0
+MERGE_CELLS = 0.3
 
 
 @dataclass(frozen=True)
@@ -88,7 +89,13 @@ def joint_amplitudes(spec: RangeSpectrum, lag: np.ndarray, present: np.ndarray) 
     gram = (e.conj() * spec.model[:, None, :]) @ e.transpose(0, 2, 1)
     rhs = (e.conj() @ spec.s[..., None])[..., 0]
     gram = gram + np.eye(lag.shape[1])[None] * (~present)[:, :, None]  # absent paths: a = 0
-    return np.linalg.solve(gram, rhs[..., None])[..., 0]
+    return np.linalg.solve(_ridge(gram), rhs[..., None])[..., 0]
+
+
+def _ridge(gram: np.ndarray) -> np.ndarray:
+    """A 1e-9 relative diagonal load, so two paths that met at one lag stay solvable."""
+    load = 1e-9 * np.abs(np.trace(gram, axis1=1, axis2=2))[:, None, None] / gram.shape[1]
+    return gram + load * np.eye(gram.shape[1])[None]
 
 
 def relax(spec: RangeSpectrum, lag: np.ndarray, amp: np.ndarray, present: np.ndarray, fixed: np.ndarray,
@@ -134,13 +141,13 @@ def polish(spec: RangeSpectrum, lag: np.ndarray, present: np.ndarray, fixed: np.
         d = amp[..., None] * spec.model[:, None, :] * e * (-w)  # ∂(model)/∂t_k
         # project out the amplitudes' span (Kaufman's variable-projection Jacobian)
         gram = np.einsum("bip,bp,bjp->bij", e.conj(), spec.model, e) + eye * (~present)[:, :, None]
-        coef = np.linalg.solve(gram, np.einsum("bip,bjp->bij", e.conj(), d))  # (B, M_cols, M_derivs)
+        coef = np.linalg.solve(_ridge(gram), np.einsum("bip,bjp->bij", e.conj(), d))  # (B, M_cols, M_derivs)
         d = d - np.einsum("bp,bip,bij->bjp", spec.model, e, coef)
         inv_m = 1.0 / spec.model
         hess = np.einsum("bip,bp,bjp->bij", d.conj(), inv_m, d).real
         grad = np.einsum("bip,bp,bp->bi", d.conj(), inv_m, resid).real
         hess = hess * movable[:, :, None] * movable[:, None, :] + eye * (~movable)[:, :, None]
-        step = np.linalg.solve(hess, (grad * movable)[..., None])[..., 0]
+        step = np.linalg.solve(_ridge(hess.astype(np.complex128)).real, (grad * movable)[..., None])[..., 0]
         lag = np.where(movable, lag + np.clip(step, -0.25, 0.25), lag)
     return lag, joint_amplitudes(spec, lag, present)
 
@@ -234,4 +241,8 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, iterati
         lag, amp, used = refine_jointly(spec, lag, amp, present, fixed, cfg.relax_passes, iterations)
         spent += refined.dft_evaluations + used
     valid = present[:, 1:] & gate.contains(np.nan_to_num(lag[:, 1:], nan=-np.inf))
+    # two paths that converged onto one another are one target: keep the stronger
+    gap = np.abs(lag[:, 1:, None] - lag[:, None, 1:])
+    weaker = np.abs(amp[:, 1:, None]) < np.abs(amp[:, None, 1:])
+    valid &= ~((gap < MERGE_CELLS) & weaker & valid[:, None, :]).any(axis=2)
     return Detections(lag[:, 1:], amp[:, 1:], valid, spent)
