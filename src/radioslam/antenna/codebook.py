@@ -29,6 +29,11 @@ def beam_angle(indices: np.ndarray, bits: int) -> np.ndarray:
     return np.arcsin(2.0 * np.asarray(indices) / 2**bits)
 
 
+def nearest_beam_row(beam_angles: np.ndarray, bearing_rad: float) -> int:
+    """Row of the beam whose terminal-frame pointing angle is closest to ``bearing_rad``."""
+    return int(np.argmin(np.abs(np.angle(np.exp(1j * (np.asarray(beam_angles) - bearing_rad))))))
+
+
 @dataclass(frozen=True)
 class BeamSet:
     """The swept beams of one pose: every (orientation, codebook index) pair, flattened.

@@ -4,17 +4,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from radioslam.antenna.codebook import BeamSet
+from radioslam.antenna.codebook import BeamSet, nearest_beam_row
 from radioslam.capture import Capture, CaptureMode
 from radioslam.config import RadioConfig, bistatic_delay_s
+from radioslam.sim.noise import noise_variance
 from radioslam.sim.paths import EchoPaths, PathKind
 from radioslam.sim.simulator import Simulator
 
 
 def nearest_beam(radio: RadioConfig, bearing_rad: float) -> int:
     """Row of the beam pointing closest to a terminal-frame bearing."""
-    angle = BeamSet.from_config(radio).angle
-    return int(np.argmin(np.abs(np.angle(np.exp(1j * (angle - bearing_rad))))))
+    return nearest_beam_row(BeamSet.from_config(radio).angle, bearing_rad)
 
 
 def point_paths(radio: RadioConfig, ranges_m, bearing_rad: float, snr_db, phases_rad=None) -> EchoPaths:
@@ -23,7 +23,7 @@ def point_paths(radio: RadioConfig, ranges_m, bearing_rad: float, snr_db, phases
     snr = np.broadcast_to(np.asarray(snr_db, dtype=np.float64), ranges_m.shape)
     beams = BeamSet.from_config(radio)
     gain = beams.two_way_gain(np.array([bearing_rad]))[nearest_beam(radio, bearing_rad), 0]
-    sigma2 = Simulator.from_radio(radio, rows=[0]).noise_variance
+    sigma2 = noise_variance(radio)
     magnitude = np.sqrt(sigma2 * 10.0 ** (snr / 10.0)) / gain
     phase = np.zeros_like(ranges_m) if phases_rad is None else np.asarray(phases_rad, dtype=np.float64)
     n = len(ranges_m)

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from radioslam.antenna.codebook import nearest_beam_row
 from radioslam.capture import Capture
 from radioslam.config import bistatic_delay_s
 from radioslam.sensing.config import SensingConfig
@@ -55,11 +56,6 @@ class Calibration:
                              "bias_s": t.bias_s} for t in self.targets]}
 
 
-def facing_beam(capture: Capture, bearing_rad: float = 0.0) -> int:
-    """Row of the beam pointing closest to ``bearing_rad`` (terminal frame)."""
-    return int(np.argmin(np.abs(np.angle(np.exp(1j * (capture.beam_angle_rad - bearing_rad))))))
-
-
 def estimate_hardware_delay(captures: list[Capture], ranges_m: np.ndarray, cfg: SensingConfig | None = None,
                             source: str = "") -> Calibration:
     """Eq. (11) over targets on the array normal, one capture per target."""
@@ -69,18 +65,17 @@ def estimate_hardware_delay(captures: list[Capture], ranges_m: np.ndarray, cfg: 
         raise SensingError(f"{len(captures)} captures for {len(ranges_m)} ranges", field="ranges")
     radio = captures[0].radio
     ota = bistatic_delay_s(ranges_m, radio.array_baseline_m)
-    fs = radio.sample_rate_hz
+    half_gate = GATE_CELLS / radio.sample_rate_hz
+    rows = [nearest_beam_row(cap.beam_angle_rad, 0.0) for cap in captures]  # the beams facing the targets
     # pass 1: the strongest peak of each target, no gate and no leakage model
-    first = []
-    for cap, t_o in zip(captures, ota):
-        one = Receiver(radio, None, cfg).delays_of_strongest(cap, facing_beam(cap))
-        first.append(one - t_o)
-    guess = float(np.median(first))
+    blind = Receiver(radio, None, cfg)
+    guess = float(np.median([sum(blind.beam_delay(cap, row)) - t_o for cap, row, t_o in zip(captures, rows, ota)]))
     # pass 2 (twice): gate around T_H + T_O, leakage at T_H + b/c cancelled jointly
     for _ in range(2):
+        receiver = Receiver(radio, guess, cfg)
         targets = []
-        for cap, r, t_o in zip(captures, ranges_m, ota):
-            t1, t2 = Receiver(radio, guess, cfg).gated_delay(cap, facing_beam(cap), guess + t_o, GATE_CELLS / fs)
+        for cap, row, r, t_o in zip(captures, rows, ranges_m, ota):
+            t1, t2 = receiver.beam_delay(cap, row, (guess + t_o - half_gate, guess + t_o + half_gate))
             if not np.isfinite(t2):
                 raise SensingError(f"no echo of the calibration target at {r:g} m", file=cap.source,
                                    field=f"target {r:g} m")

@@ -20,6 +20,16 @@ from scipy.optimize import brentq
 from radioslam.sensing.config import CfarKind
 
 
+def noise_floor(power: np.ndarray) -> np.ndarray:
+    """Mean noise power per row (B,), from the median of exponentially distributed cells."""
+    return np.median(power, axis=-1) / np.log(2.0)
+
+
+def noise_threshold(power: np.ndarray, pfa: float) -> np.ndarray:
+    """(B, 1): a cell of pure noise exceeds it somewhere in the N cells of its row with probability ≈ pfa."""
+    return noise_floor(power)[:, None] * np.log(power.shape[1] / pfa)
+
+
 def ca_alpha(n: int, pfa: float) -> float:
     return n * (pfa ** (-1.0 / n) - 1.0)
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from radioslam.nr.ofdm import phase_ramp
 from radioslam.sensing.bisection import bisect_peaks, neighbour_values
-from radioslam.sensing.cfar import cfar_threshold
+from radioslam.sensing.cfar import cfar_threshold, noise_threshold
 from radioslam.sensing.config import SensingConfig
 from radioslam.sensing.profile import RangeSpectrum, signed_lag
 
@@ -50,16 +50,11 @@ class LagGate:
     leakage: np.ndarray
 
     def mask(self, fft_size: int) -> np.ndarray:
-        lags = signed_lag(np.arange(fft_size), fft_size)[None, :]
-        return (lags >= self.low[:, None]) & (lags <= self.high[:, None])
+        """(B, N): which integer lags lie in the gate."""
+        return self.contains(signed_lag(np.arange(fft_size), fft_size)[None, :])
 
     def contains(self, lag: np.ndarray) -> np.ndarray:
         return (lag >= self.low[:, None]) & (lag <= self.high[:, None])
-
-
-def noise_floor(power: np.ndarray) -> np.ndarray:
-    """Mean noise power per beam (B,), from the median of exponentially distributed cells."""
-    return np.median(power, axis=1) / np.log(2.0)
 
 
 def local_maxima(power: np.ndarray) -> np.ndarray:
@@ -147,7 +142,7 @@ def polish(spec: RangeSpectrum, lag: np.ndarray, present: np.ndarray, fixed: np.
         hess = np.einsum("bip,bp,bjp->bij", d.conj(), inv_m, d).real
         grad = np.einsum("bip,bp,bp->bi", d.conj(), inv_m, resid).real
         hess = hess * movable[:, :, None] * movable[:, None, :] + eye * (~movable)[:, :, None]
-        step = np.linalg.solve(_ridge(hess.astype(np.complex128)).real, (grad * movable)[..., None])[..., 0]
+        step = np.linalg.solve(_ridge(hess), (grad * movable)[..., None])[..., 0]
         lag = np.where(movable, lag + np.clip(step, -0.25, 0.25), lag)
     return lag, joint_amplitudes(spec, lag, present)
 
@@ -196,8 +191,8 @@ def pdp_peaks(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, iterations
     profile = resid.profile()
     power = np.abs(profile) ** 2
     n = spec.fft_size
-    floor = noise_floor(power)[:, None] * np.log(n / cfg.noise_pfa)
-    peaks, ok = strongest(power, local_maxima(power) & gate.mask(n) & (power > floor), cfg.peaks)
+    peaks, ok = strongest(power, local_maxima(power) & gate.mask(n) & (power > noise_threshold(power, cfg.noise_pfa)),
+                          cfg.peaks)
     refined = bisect_peaks(resid, signed_lag(peaks, n), neighbour_values(profile, peaks), iterations)
     return (lag, amp, present, fixed), refined, ok
 
@@ -229,7 +224,7 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, iterati
         profile = resid.profile()
         power = np.abs(profile) ** 2
         threshold = np.maximum(cfar_threshold(power, cfg.cfar, cfg.cfar_guard, cfg.cfar_train, cfg.cfar_pfa),
-                               noise_floor(power)[:, None] * np.log(n / cfg.noise_pfa))
+                               noise_threshold(power, cfg.noise_pfa))
         peaks, ok = strongest(power, local_maxima(power) & allowed_lags & (power > threshold), 1)
         searching &= ok[:, 0]
         if not searching.any():

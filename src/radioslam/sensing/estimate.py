@@ -44,11 +44,6 @@ def received_symbols(capture: Capture, window_offset: np.ndarray) -> np.ndarray:
     return demodulate(capture.samples, starts, capture.numerology)
 
 
-def least_squares_per_symbol(y: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Ĥ_q(p) = y_q(p) / x_q(p), one estimate per symbol (B, R, n_sc)."""
-    return y / x
-
-
 def estimate_channel(capture: Capture, window_offset: np.ndarray, symbols: slice = slice(None)) -> ChannelEstimate:
     """Z, W over the sensing symbols selected by ``symbols`` (all R by default)."""
     y = received_symbols(capture, window_offset)[:, symbols]

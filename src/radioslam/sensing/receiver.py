@@ -21,7 +21,7 @@ from radioslam.sensing.detect import Detections, LagGate, detect_multi, detect_s
 from radioslam.sensing.errors import SensingError
 from radioslam.sensing.estimate import ChannelEstimate, estimate_channel
 from radioslam.sensing.pointcloud import Scan, build_scan
-from radioslam.sensing.profile import RangeSpectrum, mf_spectrum, pdp_spectrum
+from radioslam.sensing.profile import RangeSpectrum, mf_spectrum, pdp_spectrum, signed_lag
 from radioslam.sensing.sync import coarse_sync
 
 # the radio parameters the receiver's processing depends on
@@ -39,9 +39,21 @@ class SensingResult:
     range_m: np.ndarray  # (B, M)
     power: np.ndarray  # (B, M) |amplitude|²
     valid: np.ndarray  # (B, M)
-    profile_power: np.ndarray  # (B, N) |F|² at integer lags (leakage included)
-    profile_range_m: np.ndarray  # (B, N) range of each integer lag
     dft_evaluations: int
+    spectrum: RangeSpectrum  # what the range profiles are computed from, only when asked for
+    window_offset: np.ndarray  # (B,)
+    receiver: "Receiver"
+
+    @property
+    def profile_power(self) -> np.ndarray:
+        """(B, N) |F|² at integer lags (leakage included)."""
+        return np.abs(self.spectrum.profile()) ** 2
+
+    @property
+    def profile_range_m(self) -> np.ndarray:
+        """(B, N) range of each integer lag."""
+        lags = signed_lag(np.arange(self.spectrum.fft_size), self.spectrum.fft_size)
+        return self.receiver.to_range((self.window_offset[:, None] + lags[None, :]) / self.receiver.fs)
 
 
 class Receiver:
@@ -116,26 +128,20 @@ class Receiver:
         # 5. point cloud: normalize by the scan's peak, keep what clears the threshold
         scan = build_scan(rng, power, valid, capture.beam_angle_rad, capture.beam_index, capture.orientation,
                           self.point_threshold_db())
-        lags = (np.arange(self.n) + self.n // 2) % self.n - self.n // 2
-        profile_delay = (est.window_offset[:, None] + lags[None, :]) / self.fs
-        return SensingResult(scan, t1 / self.fs, delay, rng, power, valid, np.abs(spec.profile()) ** 2,
-                             self.to_range(profile_delay), det.dft_evaluations)
+        return SensingResult(scan, t1 / self.fs, delay, rng, power, valid, det.dft_evaluations, spec,
+                             est.window_offset, self)
 
-    # calibration helpers: delays before the hardware delay is known (eq. (11))
-    def delays_of_strongest(self, capture: Capture, row: int) -> float:
-        """T1 + T2 (s) of the strongest refined peak on one beam, no gate."""
-        _, _, est = self.front_end(capture.select([row]))
-        spec = pdp_spectrum(est, self.p, self.n)
-        everywhere = LagGate(np.array([-self.n / 2.0]), np.array([self.n / 2.0]), np.array([np.nan]))
-        det = detect_single(spec, everywhere, self.cfg, self.iterations)
-        return float((est.window_offset[0] + det.lag[0, 0]) / self.fs)
+    def beam_delay(self, capture: Capture, row: int, window_s: tuple[float, float] | None = None):
+        """(T1, T2) in seconds of the strongest PDP echo on one beam (calibration, eq. (11)).
 
-    def gated_delay(self, capture: Capture, row: int, expected_s: float, half_width_s: float):
-        """(T1, T2) in seconds of the strongest echo within ±half_width of ``expected_s``, leakage cancelled."""
+        ``window_s`` bounds T1 + T2 (default: every lag of the FFT window); the leakage is
+        cancelled when the hardware delay is known. T2 is NaN when nothing is found.
+        """
         t1, _, est = self.front_end(capture.select([row]))
-        spec = pdp_spectrum(est, self.p, self.n)
-        gate = self.gate(est.window_offset, np.array([expected_s - half_width_s]),
-                         np.array([expected_s + half_width_s]))
-        det = detect_single(spec, gate, self.cfg, self.iterations)
-        t2 = (est.window_offset[0] + det.lag[0, 0] - t1[0]) / self.fs if det.valid[0, 0] else np.nan
+        offset = est.window_offset
+        low, high = ((offset - self.n / 2) / self.fs, (offset + self.n / 2) / self.fs) if window_s is None else (
+            np.array([window_s[0]]), np.array([window_s[1]]))
+        det = detect_single(pdp_spectrum(est, self.p, self.n), self.gate(offset, low, high), self.cfg,
+                            self.iterations)
+        t2 = (offset[0] + det.lag[0, 0] - t1[0]) / self.fs if det.valid[0, 0] else np.nan
         return float(t1[0] / self.fs), float(t2)

@@ -21,6 +21,7 @@ import scipy.fft as sfft
 
 from radioslam.capture import Capture, CaptureMode
 from radioslam.nr.pss import pss_grid
+from radioslam.sensing.cfar import noise_floor
 
 
 @dataclass(frozen=True)
@@ -50,7 +51,8 @@ def coarse_sync(capture: Capture, decimation: int = 4, pfa: float = 1e-6) -> Syn
         return SyncResult(np.full(b, capture.fft_offset_samples, dtype=np.int64), np.ones(b, bool), np.full(b, np.inf))
     num = capture.numerology
     useful0 = capture.useful_starts()[:, 0]  # where the PSS useful part starts if undelayed
-    burst = capture.cp_lengths().sum(axis=1) + num.fft_size * capture.cp_lengths().shape[1]
+    cp = capture.cp_lengths()
+    burst = cp.sum(axis=1) + num.fft_size * cp.shape[1]
     window = capture.samples.shape[1]
     search = int(min(window, (window - burst.min()) + useful0.max() + num.fft_size))
     search -= search % decimation
@@ -64,7 +66,7 @@ def coarse_sync(capture: Capture, decimation: int = 4, pfa: float = 1e-6) -> Syn
     corr = sfft.ifft(sfft.fft(low, size, axis=1) * np.conj(sfft.fft(replica, size))[None], axis=1)[:, :lags]
     power = np.abs(corr) ** 2
     peak = np.argmax(power, axis=1)
-    floor = np.median(power, axis=1) / np.log(2.0)  # mean of exponential noise from its median
+    floor = noise_floor(power)
     ratio = power[np.arange(len(peak)), peak] / np.maximum(floor, np.finfo(float).tiny)
     found = ratio > np.log(lags / pfa)
     # the block average of samples 4n…4n+3 is centred on 4n + 1.5: round to the grid point 4n + 2

@@ -22,13 +22,17 @@ def boresight_row(radio: RadioConfig) -> int:
     return radio.beams_per_side
 
 
+def plate_simulator(radio: RadioConfig, range_m: float, mode: CaptureMode = CaptureMode.WAVEFORM) -> Simulator:
+    """The boresight beam of ``radio`` facing the 1 m² metal plate at ``range_m``."""
+    scene = single_plate(float(range_m)).with_radio(**radio.model_dump())
+    return Simulator.from_scene(scene, mode, rows=[boresight_row(radio)])
+
+
 def simulate_calibration_captures(radio: RadioConfig, ranges_m: np.ndarray, seed: int,
                                   mode: CaptureMode = CaptureMode.WAVEFORM) -> list[Capture]:
     """One capture of the boresight beam per plate range; target k draws from child k of ``seed``."""
     children = np.random.SeedSequence(seed).spawn(len(ranges_m))
     captures = []
     for r, child in zip(ranges_m, children):
-        scene = single_plate(float(r)).with_radio(**radio.model_dump())
-        sim = Simulator.from_scene(scene, mode, rows=[boresight_row(radio)])
-        captures.append(sim.simulate_pose(0, np.random.default_rng(child)))
+        captures.append(plate_simulator(radio, r, mode).simulate_pose(0, np.random.default_rng(child)))
     return captures

@@ -14,10 +14,8 @@ import numpy as np
 from radioslam.config import RadioConfig
 from radioslam.eval.crb import range_crb_m
 from radioslam.eval.point_targets import capture_point_targets, nearest_beam, point_paths
-from radioslam.scene.builtin import single_plate
 from radioslam.sensing import Receiver, SensingConfig, estimate_hardware_delay
-from radioslam.sim.calibration_targets import boresight_row, calibration_ranges, simulate_calibration_captures
-from radioslam.sim.simulator import Simulator
+from radioslam.sim.calibration_targets import calibration_ranges, plate_simulator, simulate_calibration_captures
 
 NEAR_GATE_M = 0.3  # Table I starts at 0.8 m, inside the default 1.5 m gate
 
@@ -51,7 +49,7 @@ class Table1Result:
 
 def plate_errors(radio: RadioConfig, receiver: Receiver, range_m: float, trials: int, seed: int):
     """(ε1, ε2) of ``trials`` captures of the plate at ``range_m``, each (trials,)."""
-    sim = Simulator.from_scene(single_plate(range_m).with_radio(**radio.model_dump()), rows=[boresight_row(radio)])
+    sim = plate_simulator(radio, range_m)
     e1, e2 = [], []
     for child in np.random.SeedSequence(seed).spawn(trials):
         res = receiver.sense(sim.simulate_pose(0, np.random.default_rng(child)))
@@ -81,10 +79,9 @@ def crb_sweep(radio: RadioConfig, snr_db: np.ndarray, trials: int, seed: int) ->
 def run_table1(radio: RadioConfig | None = None, trials: int = 20, seed: int = 0,
                crb_snr_db=(0.0, 5.0, 10.0, 15.0, 20.0), crb_trials: int = 100) -> Table1Result:
     radio = radio or RadioConfig()
-    ranges = calibration_ranges(radio)
-    # 1. eq. (11) calibration on its own plate measurements
-    cal_ranges = calibration_ranges(radio)
-    cal = estimate_hardware_delay(simulate_calibration_captures(radio, cal_ranges, seed + 1), cal_ranges)
+    ranges = calibration_ranges(radio)  # the paper's Table I ranges are its calibration ranges
+    # 1. eq. (11) calibration on its own plate measurements (other noise and data than the trials)
+    cal = estimate_hardware_delay(simulate_calibration_captures(radio, ranges, seed + 1), ranges)
     receiver = Receiver(radio, cal.hardware_delay_s, SensingConfig(min_range_m=NEAR_GATE_M))
     # 2. ε1 and ε2 over many noise trials per range
     errors = [plate_errors(radio, receiver, float(r), trials, seed + 100 + k) for k, r in enumerate(ranges)]
