@@ -184,7 +184,7 @@ def sense(
     calibration: Optional[Path] = typer.Option(None, "--calibration", help="default: DIR/calibration.json"),
     detector: str = typer.Option("single", "--detector", help="single (the paper's) or multi (CFAR + cancellation)"),
     threshold_db: Optional[float] = typer.Option(None, "--threshold-db", max=0.0,
-                                                 help="point threshold re. the scan peak (default −13)"),
+                                                 help="point threshold re. scan peak (default −13 single, −25 multi)"),
     plot_pose: int = typer.Option(0, "--plot-pose", help="pose whose heatmap and cloud to draw; −1: none"),
 ) -> None:
     """Turn SigMF captures into point clouds: DIR/scans/NNNN.ply."""
