@@ -65,9 +65,9 @@ class Capture:
     def numerology(self) -> Numerology:
         return Numerology.from_config(self.radio)
 
-    def tx_symbols(self) -> np.ndarray:
+    def tx_symbols(self, dtype=np.complex128) -> np.ndarray:
         """The transmitted 16-QAM sensing symbols (B, R, n_sc)."""
-        return qam16_modulate(self.tx_bits)
+        return qam16_modulate(self.tx_bits, dtype)
 
     def cp_lengths(self) -> np.ndarray:
         """CP length (B, 1 + R) of every symbol in each beam's window."""

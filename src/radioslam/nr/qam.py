@@ -13,11 +13,15 @@ def qam16_modulate(bits: np.ndarray, dtype=np.complex128) -> np.ndarray:
 
     d = [(1−2b0)(2−(1−2b2)) + j(1−2b1)(2−(1−2b3))] / √10, 38.211 §5.1.4.
     """
-    b = np.asarray(bits, dtype=np.int8)
+    b = np.asarray(bits, dtype=np.uint8)
     if b.shape[-1] % BITS_PER_SYMBOL:
         raise ValueError("the bit count must be a multiple of 4")
-    b = b.reshape(*b.shape[:-1], -1, BITS_PER_SYMBOL)
-    index = (b[..., 0] << 3) | (b[..., 1] << 2) | (b[..., 2] << 1) | b[..., 3]
+    if b.shape[-1] % 8:  # an odd symbol count: pad one symbol, drop it after mapping
+        padded = np.concatenate([b, np.zeros((*b.shape[:-1], BITS_PER_SYMBOL), np.uint8)], axis=-1)
+        return qam16_modulate(padded, dtype)[..., :-1]
+    # packbits puts two symbols' b0b1b2b3 into one byte: the high nibble, then the low one
+    packed = np.packbits(b, axis=-1)
+    index = np.stack([packed >> 4, packed & 15], axis=-1).reshape(*packed.shape[:-1], -1)
     return _TABLE.astype(dtype, copy=False)[index]
 
 

@@ -47,7 +47,7 @@ def received_symbols(capture: Capture, window_offset: np.ndarray) -> np.ndarray:
 def estimate_channel(capture: Capture, window_offset: np.ndarray, symbols: slice = slice(None)) -> ChannelEstimate:
     """Z, W over the sensing symbols selected by ``symbols`` (all R by default)."""
     y = received_symbols(capture, window_offset)[:, symbols]
-    x = capture.tx_symbols()[:, symbols].astype(y.dtype)
-    z = np.einsum("bqp,bqp->bp", y, x.conj())
-    w = np.einsum("bqp,bqp->bp", x, x.conj()).real
+    x = capture.tx_symbols(y.dtype)[:, symbols]
+    z = (y * x.conj()).sum(axis=1)
+    w = (x.real**2 + x.imag**2).sum(axis=1)
     return ChannelEstimate(z, w, np.asarray(window_offset, dtype=np.int64))

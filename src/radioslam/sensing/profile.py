@@ -14,11 +14,12 @@ sidelobes of the band edge (the Dirichlet kernel of 792 of 1024 subcarriers).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import scipy.fft as sfft
 
-from radioslam.nr.ofdm import phase_ramp
+from radioslam.nr.ofdm import BlockedSpectrum, phase_ramp
 from radioslam.sensing.config import Taper
 from radioslam.sensing.estimate import ChannelEstimate
 
@@ -38,7 +39,7 @@ class RangeSpectrum:
     p: np.ndarray  # (n_sc,) signed subcarrier indices
     fft_size: int
 
-    @property
+    @cached_property
     def scale(self) -> np.ndarray:
         """(B,) Σ_p model(p), so that F(t) of a lone path at lag t is its amplitude."""
         return self.model.sum(axis=1)
@@ -50,10 +51,22 @@ class RangeSpectrum:
         bins[:, self.p % n] = self.s
         return sfft.ifft(bins, axis=1, norm="forward", workers=-1) / self.scale[:, None]
 
+    @cached_property
+    def _s_sum(self) -> BlockedSpectrum:
+        return BlockedSpectrum(self.s, self.p, self.fft_size)
+
+    @cached_property
+    def _model_sum(self) -> BlockedSpectrum:
+        return BlockedSpectrum(self.model, self.p, self.fft_size)
+
     def at(self, lags: np.ndarray) -> np.ndarray:
         """F at fractional lags (B, K): one n_sc-term DFT evaluation per entry."""
-        phase = phase_ramp(lags, self.p, self.fft_size)  # e^{−j2πpt/N}; F needs its conjugate
-        return (phase.conj() @ self.s[..., None])[..., 0] / self.scale[:, None]
+        return self._s_sum(lags) / self.scale[:, None]
+
+    def kernel(self, lags: np.ndarray) -> np.ndarray:
+        """Σ_p model(p)·e^{j2πpt/N} at lags (B, K): the response at lag t of a path at lag 0,
+        unnormalized (the Gram entries of two paths t apart)."""
+        return self._model_sum(lags)
 
     def path_spectrum(self, lags: np.ndarray, amplitude: np.ndarray) -> np.ndarray:
         """The spectrum (B, n_sc) that paths (B, K) of the given lags and amplitudes put in S."""
@@ -61,7 +74,7 @@ class RangeSpectrum:
         return (amplitude[:, None, :] @ phase)[:, 0] * self.model
 
     def rows(self, mask: np.ndarray) -> "RangeSpectrum":
-        """The beams selected by a boolean mask (B,)."""
+        """The beams selected by a boolean mask (B,) or an index array."""
         return RangeSpectrum(self.s[mask], self.model[mask], self.p, self.fft_size)
 
     def minus(self, spectrum: np.ndarray) -> "RangeSpectrum":
