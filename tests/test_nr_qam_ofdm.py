@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from radioslam.nr import Numerology, demodulate, modulate, qam16_demodulate, qam16_modulate, random_bits
-from radioslam.nr.ofdm import symbol_starts
+from radioslam.nr.ofdm import BlockedSpectrum, from_fft_bins, symbol_starts, to_fft_bins
 
 
 def test_qam16_table_of_38_211():
@@ -74,3 +74,31 @@ def test_ofdm_is_energy_preserving(rng):
     grid = qam16_modulate(random_bits(rng, (1, 792 * 4)))
     x = modulate(grid, np.array([0]), num)
     assert np.isclose(np.sum(np.abs(x) ** 2), np.sum(np.abs(grid) ** 2))
+
+
+@given(st.integers(1, 9), st.integers(0, 2**32 - 1))
+@settings(max_examples=20, deadline=None)
+def test_qam16_any_symbol_count_matches_the_formula(k, seed):
+    """Odd and even symbol counts (packbits pairs symbols) against d of 38.211 §5.1.4."""
+    b = random_bits(np.random.default_rng(seed), (2, 4 * k)).reshape(2, k, 4).astype(float)
+    s = 1 - 2 * b
+    expected = (s[..., 0] * (2 - s[..., 2]) + 1j * s[..., 1] * (2 - s[..., 3])) / np.sqrt(10)
+    assert np.allclose(qam16_modulate(b.reshape(2, -1).astype(np.uint8)), expected, atol=1e-15)
+
+
+def test_blocked_spectrum_equals_the_direct_dft(rng):
+    """Σ_p X(p) e^{j2πpt/N} at fractional t, for contiguous subcarriers not a square count."""
+    p = np.arange(-396, 396)
+    x = rng.standard_normal((3, len(p))) + 1j * rng.standard_normal((3, len(p)))
+    t = rng.uniform(-512, 512, size=(3, 5))
+    direct = np.einsum("bp,bkp->bk", x, np.exp(2j * np.pi * t[..., None] * p / 1024))
+    assert np.allclose(BlockedSpectrum(x, p, 1024)(t), direct, rtol=0, atol=1e-9)
+    with pytest.raises(ValueError):
+        BlockedSpectrum(x[:, :-1], np.delete(p, 5), 1024)
+
+
+def test_from_fft_bins_inverts_to_fft_bins(rng):
+    num = Numerology(1024, 792, 120e3)
+    grid = rng.standard_normal((2, 792)) + 0j
+    assert np.array_equal(from_fft_bins(to_fft_bins(grid, num), num), grid)
+    assert np.array_equal(from_fft_bins(np.arange(1024), num), np.arange(1024)[num.fft_bins()])
