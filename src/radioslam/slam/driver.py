@@ -1,0 +1,175 @@
+"""The SLAM driver (paper §IV-B): radio scans in, trajectory and loop closures out.
+
+Main loop per scan, one step per comment. There is no odometry input: a
+constant-velocity prediction seeds the front end's correlative search.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from radioslam.sensing.pointcloud import Scan
+from radioslam.slam.branch_bound import BranchAndBound
+from radioslam.slam.config import SlamConfig
+from radioslam.slam.correlative import correlative_match
+from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.loop_closure import BRANCH_LEVELS, LoopClosure, match_loop
+from radioslam.slam.normals import specular_normals
+from radioslam.slam.pose_graph import PoseGraph, local_covariance
+from radioslam.slam.refine import refine_pose
+from radioslam.slam.se2 import between, compose
+from radioslam.slam.submap import Submap, fused_points, submap_grid
+
+# a skipped scan is tied to its neighbours by the constant-velocity model only, this loosely
+SKIPPED_SIGMA = np.array([0.5, 0.5, np.radians(10.0)])
+FIRST_WINDOW_M, FIRST_WINDOW_DEG = 1.0, 20.0  # no velocity yet before the second scan
+
+
+@dataclass
+class SlamResult:
+    poses: np.ndarray  # (P, 3) with loop closure and pose graph optimization
+    odometry: np.ndarray  # (P, 3) front end only
+    skipped: np.ndarray  # (P,) scans with too few points
+    degenerate: np.ndarray  # (P,) matches whose covariance is degenerate (e.g. a featureless corridor)
+    match_score: np.ndarray  # (P,) normalized front-end score, NaN where not matched
+    loops: list[LoopClosure] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+    seconds_per_scan: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+class RadioSlam:
+    """Built from plain settings; ``loop_hook`` lets a test replace accepted loop closures."""
+
+    def __init__(self, cfg: SlamConfig | None = None,
+                 loop_hook: Callable[[LoopClosure], LoopClosure] | None = None):
+        self.cfg = cfg or SlamConfig()
+        self.loop_hook = loop_hook
+
+    def run(self, scans: list[Scan]) -> SlamResult:
+        cfg, n = self.cfg, len(scans)
+        res, sigma, nsig = cfg.resolution_m, cfg.sigma_m, np.radians(cfg.normal_sigma_deg)
+        margin = max(cfg.window_m, cfg.loop_window_m) + 3 * sigma
+        graph = PoseGraph()
+        estimates: dict[int, np.ndarray] = {}
+        points: dict[int, np.ndarray] = {}
+        normals: dict[int, np.ndarray] = {}
+        odometry = np.zeros((n, 3))
+        odo_cov: dict[int, np.ndarray] = {}
+        out = SlamResult(np.zeros((n, 3)), odometry, np.zeros(n, bool), np.zeros(n, bool), np.full(n, np.nan))
+        kept: list[int] = []
+        submaps: list[Submap] = []
+        velocity, last = None, None
+        seconds = []
+        for k, scan in enumerate(scans):
+            tick = time.perf_counter()
+            # 1. a scan with too few points is skipped: the pose follows the constant-velocity model
+            if len(scan) < cfg.min_points:
+                out.skipped[k] = True
+                out.warnings.append(f"scan {k}: {len(scan)} points (< {cfg.min_points}), skipped")
+                pose = np.zeros(3) if last is None else compose(estimates[last], velocity if velocity is not None
+                                                                else np.zeros(3))
+                odometry[k] = pose if last is None else compose(odometry[last], between(estimates[last], pose))
+                estimates[k] = pose
+                graph.add_pose(k, pose)
+                if last is not None:
+                    graph.add_odometry(last, k, between(estimates[last], pose), np.diag(SKIPPED_SIGMA**2))
+                last = k
+                seconds.append(time.perf_counter() - tick)
+                continue
+            xy, phi = scan.xy, specular_normals(scan)
+            if not kept:
+                # the first scan defines the map frame
+                estimates[k] = np.zeros(3) if last is None else estimates[last]
+                odometry[k] = estimates[k]
+                graph.add_pose(k, estimates[k])
+                if last is not None:
+                    graph.add_odometry(last, k, np.zeros(3), np.diag(SKIPPED_SIGMA**2))
+            else:
+                # 2. predict with constant velocity
+                prediction = compose(estimates[last], velocity if velocity is not None else np.zeros(3))
+                # 3. match against the local map of the latest scans: coarse correlative search, then refine
+                local_keys = kept[-cfg.local_map_scans:]
+                map_xy, map_n = fused_points(local_keys, estimates, points, normals, np.zeros(3))
+                grid = LikelihoodGrid.from_points(map_xy, res, sigma, margin + FIRST_WINDOW_M, map_n, nsig)
+                pose, cov, score = self._front_end(grid, xy, phi, prediction, first=velocity is None)
+                out.match_score[k] = score
+                out.degenerate[k] = degenerate(cov, cfg.degenerate_ratio)
+                if out.degenerate[k]:
+                    out.warnings.append(f"scan {k}: degenerate match (featureless surroundings), pose uncertain")
+                # 4. odometry factor from the previous pose
+                rel = between(estimates[last], pose)
+                odo_cov[k] = local_covariance(cov, estimates[last][2])
+                graph.add_pose(k, pose)
+                graph.add_odometry(last, k, rel, odo_cov[k])
+                odometry[k] = compose(odometry[last], rel)
+                velocity = rel if not out.skipped[last] else None
+                estimates[k] = pose
+            points[k], normals[k] = xy, phi
+            kept.append(k)
+            # 5. submaps of N consecutive scans
+            if not submaps or len(submaps[-1].keys) >= cfg.submap_scans:
+                submaps.append(Submap())
+            submaps[-1].keys.append(k)
+            # 6. loop closure against older submaps near the current pose
+            found = self._close_loops(k, submaps, estimates, points, normals, odo_cov, kept, margin)
+            for loop in found:
+                loop = self.loop_hook(loop) if self.loop_hook else loop
+                graph.add_loop(loop.anchor, loop.key, loop.relative, loop.covariance)
+                out.loops.append(loop)
+            # 7. optimize the pose graph whenever loops were added
+            if found:
+                estimates.update(graph.optimize(cfg.gnc))
+            last = k
+            seconds.append(time.perf_counter() - tick)
+        if out.loops:
+            estimates.update(graph.optimize(cfg.gnc))
+        out.poses = np.array([estimates[k] for k in range(n)])
+        out.seconds_per_scan = np.array(seconds)
+        return out
+
+    def _front_end(self, grid, xy, phi, prediction, first: bool):
+        cfg = self.cfg
+        step = np.radians(cfg.angle_step_deg)
+        if first:  # no velocity yet: a wide exact search
+            found = BranchAndBound(grid, BRANCH_LEVELS).match(xy, phi, prediction, FIRST_WINDOW_M,
+                                                               np.radians(FIRST_WINDOW_DEG), step, 0.0)
+            prediction = found.pose if found.pose is not None else prediction
+        match = correlative_match(grid, xy, phi, prediction, cfg.window_m, np.radians(cfg.window_deg), step)
+        pose = refine_pose(grid, xy, phi, match.pose, cfg.resolution_m, step)
+        return pose, match.covariance, match.score
+
+    def _close_loops(self, k, submaps, estimates, points, normals, odo_cov, kept, margin) -> list[LoopClosure]:
+        cfg = self.cfg
+        current = estimates[k]
+        found = []
+        for s in submaps[:max(0, len(submaps) - 1 - cfg.loop_skip_submaps)]:
+            members = np.array([estimates[m][:2] for m in s.keys])
+            if np.min(np.linalg.norm(members - current[:2], axis=1)) > cfg.loop_radius_m:
+                continue
+            grid = submap_grid(s, estimates, points, normals, cfg.resolution_m, cfg.sigma_m, margin,
+                               np.radians(cfg.normal_sigma_deg))
+            predicted = between(estimates[s.anchor], current)
+            drift = drift_covariance(odo_cov, [m for m in kept if s.anchor < m <= k],
+                                     np.linalg.norm(predicted[:2]))
+            loop = match_loop(grid, points[k], normals[k], predicted, drift, cfg, s.anchor, k)
+            if loop is not None:
+                found.append(loop)
+        return found
+
+
+def drift_covariance(odo_cov: dict[int, np.ndarray], keys: list[int], distance: float) -> np.ndarray:
+    """First-order drift between two poses: the odometry covariances summed, the heading's
+    variance also spreading the position by the distance between them."""
+    total = sum((odo_cov[m] for m in keys if m in odo_cov), np.zeros((3, 3)))
+    total = total + np.diag([total[2, 2] * distance**2] * 2 + [0.0])
+    return total
+
+
+def degenerate(covariance: np.ndarray, ratio: float) -> bool:
+    """Whether the position uncertainty is elongated beyond ``ratio`` (standard deviations)."""
+    eig = np.linalg.eigvalsh(covariance[:2, :2])
+    return bool(np.sqrt(eig[-1] / max(eig[0], 1e-18)) > ratio)

@@ -1,0 +1,107 @@
+"""Likelihood field of a point map, smeared to the radio point errors, with the max-pooled
+pyramid that branch and bound needs (Olson 2009 §III; Hess et al. 2016, "Real-time loop
+closure in 2D LIDAR SLAM", §V-C "precomputed grids").
+
+Each cell holds L = exp(−d²/2σ²), d the distance to the nearest map point: the
+likelihood of a new point falling there under a Gaussian error of σ. ``values[ix, iy]``
+covers the cell whose lower-left corner is origin + (ix, iy)·resolution.
+
+Radio points also carry the specular normal of the surface they came from
+(:mod:`radioslam.slam.normals`); each cell then also holds the world normal of its
+nearest map point, and a point whose normal disagrees by Δψ is scored
+L·exp(−Δψ²/2σ_ψ²). Where either normal is unknown the factor is 1. This term is what
+makes rotation observable: a wall's arc of points is blind to it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import distance_transform_edt, maximum_filter1d
+
+from radioslam.slam.errors import SlamError
+from radioslam.slam.se2 import wrap_angle
+
+# a point farther than 3σ from the map counts as this likely (log-likelihood floor)
+LIKELIHOOD_FLOOR = float(np.exp(-4.5))
+
+
+def normal_likelihood(map_normal: np.ndarray, point_normal: np.ndarray, sigma: float) -> np.ndarray:
+    """exp(−Δψ²/2σ²) of the normals' difference; 1 where either is unknown (NaN)."""
+    delta = wrap_angle(point_normal - map_normal)
+    return np.where(np.isnan(delta), 1.0, np.exp(-0.5 * (np.nan_to_num(delta) / sigma) ** 2))
+
+
+@dataclass(frozen=True)
+class LikelihoodGrid:
+    values: np.ndarray  # (NX, NY) in [0, 1]
+    origin: np.ndarray  # (2,) world position of cell (0, 0)'s lower-left corner
+    resolution: float
+    normals: np.ndarray  # (NX, NY) world normal of the nearest map point, NaN: unknown
+    normal_sigma: float
+
+    @classmethod
+    def from_points(cls, points: np.ndarray, resolution: float, sigma: float, margin: float,
+                    normals: np.ndarray | None = None, normal_sigma: float = np.inf) -> "LikelihoodGrid":
+        """The field of map points (P, 2) with their world normals (P,), ``margin`` beyond them."""
+        if len(points) == 0:
+            raise SlamError("cannot build a likelihood grid from no points", field="points")
+        origin = points.min(axis=0) - margin
+        shape = np.ceil((points.max(axis=0) + margin - origin) / resolution).astype(int) + 1
+        hit = np.zeros(shape, dtype=bool)
+        cells = np.floor((points - origin) / resolution).astype(int)
+        hit[cells[:, 0], cells[:, 1]] = True
+        cell_normal = np.full(shape, np.nan)
+        if normals is not None:
+            cell_normal[cells[:, 0], cells[:, 1]] = normals
+        # distance from each cell centre to the nearest hit cell centre, and which cell that is
+        d, (ix, iy) = distance_transform_edt(~hit, return_indices=True)
+        return cls(np.exp(-0.5 * (d * resolution / sigma) ** 2), origin, resolution, cell_normal[ix, iy],
+                   normal_sigma)
+
+    def cells(self, points: np.ndarray) -> np.ndarray:
+        """Integer cells (..., 2) of points (..., 2), clipped to the grid."""
+        c = np.floor((points - self.origin) / self.resolution).astype(np.int64)
+        return np.clip(c, 0, np.array(self.values.shape) - 1)
+
+    def inside(self, points: np.ndarray) -> np.ndarray:
+        c = np.floor((points - self.origin) / self.resolution)
+        return np.all((c >= 0) & (c < np.array(self.values.shape)), axis=-1)
+
+    def lookup(self, points: np.ndarray) -> np.ndarray:
+        """Nearest-cell likelihood of points (..., 2); 0 outside the grid."""
+        c = self.cells(points)
+        return np.where(self.inside(points), self.values[c[..., 0], c[..., 1]], 0.0)
+
+    def normal_at(self, points: np.ndarray) -> np.ndarray:
+        """World normal of the nearest map point to each point (..., 2)."""
+        c = self.cells(points)
+        return self.normals[c[..., 0], c[..., 1]]
+
+    def interpolate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Bilinear likelihood (P,) between cell centres and its gradient (P, 2) in world units."""
+        u = (points - self.origin) / self.resolution - 0.5
+        i0 = np.floor(u).astype(np.int64)
+        f = u - i0
+        hi = np.array(self.values.shape) - 1
+        x0, y0 = np.clip(i0[:, 0], 0, hi[0]), np.clip(i0[:, 1], 0, hi[1])
+        x1, y1 = np.clip(i0[:, 0] + 1, 0, hi[0]), np.clip(i0[:, 1] + 1, 0, hi[1])
+        v = self.values
+        v00, v10, v01, v11 = v[x0, y0], v[x1, y0], v[x0, y1], v[x1, y1]
+        fx, fy = f[:, 0], f[:, 1]
+        value = (v00 * (1 - fx) + v10 * fx) * (1 - fy) + (v01 * (1 - fx) + v11 * fx) * fy
+        dx = ((v10 - v00) * (1 - fy) + (v11 - v01) * fy) / self.resolution
+        dy = ((v01 - v00) * (1 - fx) + (v11 - v10) * fx) / self.resolution
+        return value, np.stack([dx, dy], axis=1)
+
+    def pyramid(self, levels: int) -> list[np.ndarray]:
+        """Max-pooled grids: level h holds the max over cells [i, i + 2^h) × [j, j + 2^h)."""
+        grids = [self.values]
+        for h in range(1, levels + 1):
+            width = 2**h
+            # a window [i, i + w) is maximum_filter1d's centred window shifted by (w − 1) // 2
+            g = maximum_filter1d(self.values, width, axis=0, mode="constant", cval=0.0, origin=-(width // 2))
+            g = maximum_filter1d(g, width, axis=1, mode="constant", cval=0.0, origin=-(width // 2))
+            grids.append(g)
+        return grids

@@ -1,0 +1,54 @@
+"""Loop closure: candidate submaps near the current pose (not the most recent ones), a
+wide-window branch-and-bound match of the current scan (Hess et al. 2016 §V), and two
+acceptance tests: the normalized score (mean point likelihood, in [0, 1], independent of
+the number of points) and geometric consistency with the graph (the match must agree with
+the pose the odometry predicts, within their joint covariance: a χ²(3) gate).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from radioslam.slam.branch_bound import BranchAndBound
+from radioslam.slam.config import SlamConfig
+from radioslam.slam.correlative import correlative_match
+from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.refine import refine_pose
+from radioslam.slam.se2 import wrap_angle
+
+BRANCH_LEVELS = 4
+
+
+@dataclass(frozen=True)
+class LoopClosure:
+    anchor: int  # the submap's first scan
+    key: int  # the current scan
+    relative: np.ndarray  # the current pose in the anchor's frame
+    covariance: np.ndarray
+    score: float
+
+
+def mahalanobis2(measured: np.ndarray, predicted: np.ndarray, covariance: np.ndarray) -> float:
+    d = measured - predicted
+    d[2] = wrap_angle(d[2])
+    return float(d @ np.linalg.solve(covariance, d))
+
+
+def match_loop(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, predicted: np.ndarray,
+               drift_covariance: np.ndarray, cfg: SlamConfig, anchor: int, key: int) -> LoopClosure | None:
+    """A verified loop closure of the scan against a submap grid (anchor frame), or None."""
+    step = np.radians(cfg.angle_step_deg)
+    found = BranchAndBound(grid, BRANCH_LEVELS).match(points, normals, predicted, cfg.loop_window_m,
+                                                       np.radians(cfg.loop_window_deg), step, cfg.loop_min_score)
+    if found.pose is None:
+        return None
+    # the response surface around the winner gives the covariance (Olson 2009 §IV)
+    local = correlative_match(grid, points, normals, found.pose, 2 * grid.resolution, 2 * step, step)
+    pose = refine_pose(grid, points, normals, local.pose, grid.resolution, step)
+    if local.score < cfg.loop_min_score:
+        return None
+    if mahalanobis2(pose, predicted, drift_covariance + local.covariance) > cfg.loop_gate_chi2:
+        return None
+    return LoopClosure(anchor, key, pose, local.covariance, local.score)

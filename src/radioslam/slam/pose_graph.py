@@ -1,0 +1,67 @@
+"""Pose graph over SE(2) with GTSAM (Dellaert & Kaess, "Factor Graphs for Robot Perception",
+2017): Pose2 between factors from the scan matcher's covariances, Levenberg–Marquardt, and
+loop factors made robust to false closures with graduated non-convexity (Yang, Antonante,
+Tzoumas, Carlone, "Graduated Non-Convexity for Robust Spatial Perception", RA-L 2020):
+``GncLMOptimizer`` with the prior and the odometry as known inliers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import gtsam
+import numpy as np
+
+from radioslam.slam.se2 import rotation
+
+PRIOR_SIGMA = np.array([1e-4, 1e-4, 1e-5])
+
+
+def _pose2(p: np.ndarray) -> gtsam.Pose2:
+    return gtsam.Pose2(float(p[0]), float(p[1]), float(p[2]))
+
+
+def local_covariance(world_covariance: np.ndarray, theta: float) -> np.ndarray:
+    """A covariance of (x, y, θ) in the world frame, expressed in the frame of a pose at θ."""
+    rot = np.eye(3)
+    rot[:2, :2] = rotation(theta).T
+    return rot @ world_covariance @ rot.T
+
+
+@dataclass
+class PoseGraph:
+    graph: gtsam.NonlinearFactorGraph = field(default_factory=gtsam.NonlinearFactorGraph)
+    initial: gtsam.Values = field(default_factory=gtsam.Values)
+    inliers: list[int] = field(default_factory=list)  # factor indices GNC must keep
+    loops: list[tuple[int, int]] = field(default_factory=list)
+
+    def add_pose(self, key: int, pose: np.ndarray) -> None:
+        if not self.initial.exists(key):
+            self.initial.insert(key, _pose2(pose))
+        if self.graph.size() == 0:
+            self.inliers.append(self.graph.size())
+            self.graph.add(gtsam.PriorFactorPose2(key, _pose2(pose), gtsam.noiseModel.Diagonal.Sigmas(PRIOR_SIGMA)))
+
+    def _between(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray) -> None:
+        noise = gtsam.noiseModel.Gaussian.Covariance(np.asarray(covariance, dtype=np.float64))
+        self.graph.add(gtsam.BetweenFactorPose2(i, j, _pose2(relative), noise))
+
+    def add_odometry(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray) -> None:
+        self.inliers.append(self.graph.size())
+        self._between(i, j, relative, covariance)
+
+    def add_loop(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray) -> None:
+        self.loops.append((i, j))
+        self._between(i, j, relative, covariance)
+
+    def optimize(self, robust: bool = True) -> dict[int, np.ndarray]:
+        """Optimized poses by key; loop factors robust (GNC, truncated least squares) when asked."""
+        if robust and self.loops:
+            params = gtsam.GncLMParams(gtsam.LevenbergMarquardtParams())
+            params.setKnownInliers(self.inliers)
+            result = gtsam.GncLMOptimizer(self.graph, self.initial, params).optimize()
+        else:
+            result = gtsam.LevenbergMarquardtOptimizer(self.graph, self.initial).optimize()
+        self.initial = result
+        return {int(k): np.array([result.atPose2(k).x(), result.atPose2(k).y(), result.atPose2(k).theta()])
+                for k in result.keys()}
