@@ -109,15 +109,9 @@ def simulate(
 
 
 def _calibrate_simulated(radio, out: Path, seed: int, targets: int | None, spacing: float | None):
-    from radioslam.io import write_calibration
-    from radioslam.sensing import estimate_hardware_delay
-    from radioslam.sim.calibration_targets import calibration_ranges, simulate_calibration_captures
+    from radioslam.pipeline import calibrate_simulated
 
-    ranges = calibration_ranges(radio, targets, spacing)
-    captures = simulate_calibration_captures(radio, ranges, seed)
-    cal = estimate_hardware_delay(captures, ranges, source=f"simulated: {len(ranges)} metal plates, seed {seed}")
-    write_calibration(out, cal)
-    return cal
+    return calibrate_simulated(radio, out, seed, targets, spacing)
 
 
 @app.command()
@@ -207,7 +201,7 @@ def sense(
             capture = read_capture(f)
             receiver = receiver or Receiver(capture.radio, cal.hardware_delay_s, cfg)
             result = receiver.sense(capture)
-            write_scan(run.scans / f"{capture.pose_index:04d}.ply", result.scan, comment=f"pose {capture.pose_index}")
+            write_scan(run.scan_file(capture.pose_index), result.scan, comment=f"pose {capture.pose_index}")
             if capture.pose_index == plot_pose:
                 from radioslam.viz.figures import polar_heatmap_and_points
 
@@ -216,6 +210,84 @@ def sense(
                                          result.scan.power_db)
             bar.advance(task)
     err.print(f"wrote {len(files)} scans to {run.scans}", markup=False)
+
+
+@app.command()
+@one_line_errors
+def slam(run_dir: Path = typer.Argument(..., help="run directory with scans/ (from 'sense' or 'run')")) -> None:
+    """SLAM on the scans: trajectory.tum, trajectory_odometry.tum, map.pgm + map.yaml, map.ply."""
+    from radioslam.pipeline import slam_stage
+
+    result = slam_stage(run_dir)
+    for line in result.warnings:
+        err.print(f"radioslam: warning: {line}", markup=False)
+    err.print(f"wrote {run_dir}: {len(result.poses)} poses, {len(result.loops)} loop closures", markup=False)
+
+
+def _print_metrics(metrics: dict, json_out: bool) -> None:
+    import json
+
+    if json_out:
+        typer.echo(json.dumps(metrics))
+        return
+    for key, value in metrics.items():
+        shown = f"{value:.4f}" if isinstance(value, float) else value
+        typer.echo(f"{key:22s} {shown}")
+
+
+@app.command()
+@one_line_errors
+def evaluate(
+    run_dir: Path = typer.Argument(..., help="run directory after 'slam'"),
+    json_out: bool = typer.Option(False, "--json", help="print one JSON object of the metrics on stdout"),
+) -> None:
+    """Trajectory and map metrics against the ground truth (writes metrics.json)."""
+    from radioslam.pipeline import evaluate_stage
+
+    _print_metrics(evaluate_stage(run_dir), json_out)
+
+
+def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out: bool) -> None:
+    from radioslam.pipeline import evaluate_stage, simulate_and_sense, slam_stage
+    from radioslam.scene import load_scene
+
+    poses = len(load_scene(scene).poses)
+    with progress() as bar:
+        task = bar.add_task("simulating and sensing", total=poses)
+        timings = simulate_and_sense(scene, out, seed, snr_db, lambda: bar.advance(task))
+    result = slam_stage(out, timings=timings)
+    for line in result.warnings:
+        err.print(f"radioslam: warning: {line}", markup=False)
+    metrics = evaluate_stage(out)
+    from radioslam.viz.report import write_report
+
+    write_report(out)
+    _print_metrics(metrics, json_out)
+    err.print(f"wrote {out} (report.html)", markup=False)
+
+
+@app.command()
+@one_line_errors
+def run(
+    scene: str = typer.Argument(..., help="scene YAML file or built-in name"),
+    out: Path = typer.Option(..., "--out", help="run directory to write"),
+    seed: int = typer.Option(0, "--seed", min=0),
+    snr_db: Optional[float] = typer.Option(None, "--snr-db", help="per-RE SNR of the reference echo, dB"),
+    json_out: bool = typer.Option(False, "--json", help="print one JSON object of the metrics on stdout"),
+) -> None:
+    """simulate → sense → slam → evaluate on any scene, and write report.html."""
+    _run_all(scene, out, seed, snr_db, json_out)
+
+
+@app.command()
+@one_line_errors
+def demo(
+    out: Path = typer.Option(Path("runs/demo"), "--out", help="run directory to write"),
+    seed: int = typer.Option(1, "--seed", min=0),
+    json_out: bool = typer.Option(False, "--json", help="print one JSON object of the metrics on stdout"),
+) -> None:
+    """The paper's Fig. 6 simulation end to end: paper-cnv, 60 poses, SNR 10 dB, waveform IQ."""
+    _run_all("paper-cnv", out, seed, None, json_out)
 
 
 @app.command()

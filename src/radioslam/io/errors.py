@@ -17,3 +17,7 @@ class PlyError(RadioslamError):
 
 class CalibrationFileError(RadioslamError):
     """A calibration.json that is missing or malformed."""
+
+
+class RosMapError(RadioslamError):
+    """A map_server map (YAML + PGM) that is missing or malformed."""

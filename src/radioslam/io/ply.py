@@ -20,10 +20,13 @@ VERTEX_DTYPE = [("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("power_db", "<f4"), (
                 ("orientation", "<u1"), ("range_m", "<f8")]
 
 
-def write_scan(path: str | Path, scan: Scan, comment: str = "") -> None:
-    """Write a scan (atomically); an empty scan is a valid file with zero vertices."""
+def write_scan(path: str | Path, scan: Scan, comment: str = "", xy: np.ndarray | None = None) -> None:
+    """Write a scan (atomically); an empty scan is a valid file with zero vertices.
+
+    ``xy`` replaces the terminal-frame coordinates (a fused map in the world frame).
+    """
     vertices = np.empty(len(scan), dtype=VERTEX_DTYPE)
-    xy = scan.xy
+    xy = scan.xy if xy is None else xy
     vertices["x"], vertices["y"], vertices["z"] = xy[:, 0], xy[:, 1], 0.0
     vertices["power_db"], vertices["beam"] = scan.power_db, scan.beam
     vertices["orientation"], vertices["range_m"] = scan.orientation, scan.range_m
@@ -33,8 +36,8 @@ def write_scan(path: str | Path, scan: Scan, comment: str = "") -> None:
         data.write(str(tmp))
 
 
-def read_scan(path: str | Path) -> Scan:
-    """Read a scan written by :func:`write_scan` (angle from x, y)."""
+def read_vertices(path: str | Path) -> np.ndarray:
+    """The vertex table of a scan or map PLY, checked for every property and finite x, y."""
     path = Path(path)
     if not path.exists():
         raise PlyError("no such file", file=path, field="(file)")
@@ -45,8 +48,20 @@ def read_scan(path: str | Path) -> Scan:
     missing = [name for name, _ in VERTEX_DTYPE if name not in vertex.dtype.names]
     if missing:
         raise PlyError("missing vertex property", file=path, field=f"vertex.{missing[0]}")
-    x, y = np.asarray(vertex["x"], float), np.asarray(vertex["y"], float)
-    if not (np.isfinite(x).all() and np.isfinite(y).all()):
+    if not (np.isfinite(vertex["x"]).all() and np.isfinite(vertex["y"]).all()):
         raise PlyError("non-finite coordinates", file=path, field="vertex.x")
+    return vertex
+
+
+def read_scan(path: str | Path) -> Scan:
+    """Read a scan written by :func:`write_scan` (angle from x, y)."""
+    vertex = read_vertices(path)
+    x, y = np.asarray(vertex["x"], float), np.asarray(vertex["y"], float)
     return Scan(np.asarray(vertex["range_m"], float), np.arctan2(y, x), np.asarray(vertex["power_db"], float),
                 np.asarray(vertex["beam"], np.int64), np.asarray(vertex["orientation"], np.int64))
+
+
+def read_map_points(path: str | Path) -> np.ndarray:
+    """World-frame x, y (P, 2) of a fused map cloud."""
+    vertex = read_vertices(path)
+    return np.column_stack([np.asarray(vertex["x"], float), np.asarray(vertex["y"], float)])

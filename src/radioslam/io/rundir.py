@@ -44,6 +44,37 @@ class RunDir:
     def scans(self) -> Path:
         return self.root / "scans"
 
+    @property
+    def trajectory(self) -> Path:
+        return self.root / "trajectory.tum"
+
+    @property
+    def trajectory_odometry(self) -> Path:
+        return self.root / "trajectory_odometry.tum"
+
+    @property
+    def map_yaml(self) -> Path:
+        return self.root / "map.yaml"
+
+    @property
+    def map_cloud(self) -> Path:
+        return self.root / "map.ply"
+
+    @property
+    def slam_summary(self) -> Path:
+        return self.root / "slam.json"
+
+    @property
+    def metrics(self) -> Path:
+        return self.root / "metrics.json"
+
+    @property
+    def report(self) -> Path:
+        return self.root / "report.html"
+
+    def scan_file(self, pose_index: int) -> Path:
+        return self.scans / f"{pose_index:04d}.ply"
+
     @staticmethod
     def pose_timestamps(count: int) -> np.ndarray:
         """Poses are stamped 1 s apart, t = index."""

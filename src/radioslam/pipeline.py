@@ -1,0 +1,146 @@
+"""The stages over a run directory (DESIGN.md §5 ★): simulate → sense → slam → evaluate.
+
+Each stage reads what the one before wrote, so the command line can run them one by one
+(``simulate``, ``sense``, ``slam``, ``evaluate``) or all at once (``run``, ``demo``).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import time
+from pathlib import Path
+
+import numpy as np
+
+from radioslam.errors import RadioslamError
+from radioslam.eval.map_metrics import map_coverage, map_error
+from radioslam.eval.trajectory_metrics import align, ate_rmse, rpe_rmse
+from radioslam.io import read_scan, read_tum, write_calibration, write_scan, write_tum
+from radioslam.io.atomic import atomic_write_text
+from radioslam.io.ply import read_map_points
+from radioslam.io.ros_map import write_ros_map
+from radioslam.io.rundir import RunDir
+from radioslam.scene import load_scene, scene_to_yaml
+from radioslam.sensing import Receiver, estimate_hardware_delay
+from radioslam.sensing.pointcloud import Scan
+from radioslam.sim import Simulator
+from radioslam.sim.calibration_targets import calibration_ranges, simulate_calibration_captures
+from radioslam.slam import RadioSlam, SlamConfig, SlamResult
+from radioslam.slam.occupancy import occupancy_grid
+from radioslam.slam.se2 import transform_points
+
+
+def calibrate_simulated(radio, out: Path, seed: int, targets: int | None = None, spacing: float | None = None):
+    """eq. (11) on metal plates simulated with this radio; writes ``calibration.json``."""
+    ranges = calibration_ranges(radio, targets, spacing)
+    captures = simulate_calibration_captures(radio, ranges, seed)
+    cal = estimate_hardware_delay(captures, ranges, source=f"simulated: {len(ranges)} metal plates, seed {seed}")
+    write_calibration(out, cal)
+    return cal
+
+
+def write_json(path: Path, doc: dict) -> None:
+    atomic_write_text(path, json.dumps(doc, indent=2) + "\n")
+
+
+def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None) -> dict:
+    """scene.yaml, ground_truth.tum, calibration.json and scans/ (IQ sensed in memory); stage seconds."""
+    timings = {}
+    tick = time.perf_counter()
+    scene = load_scene(scene_name).with_radio(snr_db=snr_db)
+    run = RunDir(out)
+    run.root.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(run.scene, scene_to_yaml(scene))
+    write_tum(run.ground_truth, run.pose_timestamps(len(scene.poses)), scene.poses)
+    cal = calibrate_simulated(scene.radio, run.calibration, seed)
+    timings["calibrate"] = time.perf_counter() - tick
+    receiver = Receiver(scene.radio, cal.hardware_delay_s)
+    simulate_s = sense_s = 0.0
+    captures = Simulator.from_scene(scene).simulate(seed)
+    for index in range(len(scene.poses)):
+        tick = time.perf_counter()
+        capture = next(captures)
+        simulate_s += time.perf_counter() - tick
+        tick = time.perf_counter()
+        write_scan(run.scan_file(capture.pose_index), receiver.sense(capture).scan, comment=f"pose {index}")
+        sense_s += time.perf_counter() - tick
+        if advance:
+            advance()
+    timings.update(simulate=simulate_s, sense=sense_s)
+    return timings
+
+
+def read_scans(run: RunDir) -> list[Scan]:
+    """scans/NNNN.ply in pose order; every pose from 0 on must have one."""
+    files = sorted(f for f in run.scans.glob("*.ply") if re.fullmatch(r"\d{4}\.ply", f.name)) \
+        if run.scans.is_dir() else []
+    if not files:
+        raise RadioslamError("no scans (NNNN.ply); run 'radioslam sense' first", file=run.scans, field="(directory)")
+    indices = [int(f.stem) for f in files]
+    if indices != list(range(len(files))):
+        missing = sorted(set(range(max(indices) + 1)) - set(indices))[0]
+        raise RadioslamError("missing scan of a pose", file=run.scan_file(missing), field="(file)")
+    return [read_scan(f) for f in files]
+
+
+def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = None) -> SlamResult:
+    """Trajectories, maps and slam.json from scans/."""
+    run = RunDir(out)
+    scans = read_scans(run)
+    tick = time.perf_counter()
+    result = RadioSlam(cfg).run(scans)
+    slam_s = time.perf_counter() - tick
+    cfg = cfg or SlamConfig()
+    stamps = run.pose_timestamps(len(scans))
+    write_tum(run.trajectory, stamps, result.poses)
+    write_tum(run.trajectory_odometry, stamps, result.odometry)
+    kept = [k for k in range(len(scans)) if not result.skipped[k]]
+    write_ros_map(run.map_yaml, occupancy_grid(result.poses[kept], [scans[k].xy for k in kept], cfg.resolution_m))
+    fused = Scan(*(np.concatenate([getattr(scans[k], f) for k in kept]) if kept else np.zeros(0)
+                   for f in ("range_m", "angle_rad", "power_db", "beam", "orientation")))
+    world = np.concatenate([transform_points(result.poses[k], scans[k].xy) for k in kept]) if kept else np.zeros((0, 2))
+    write_scan(run.map_cloud, fused, comment="fused map, world frame", xy=world)
+    write_json(run.slam_summary, {
+        "loop_closures": [{"anchor": lc.anchor, "pose": lc.key, "score": lc.score} for lc in result.loops],
+        "skipped_scans": np.flatnonzero(result.skipped).tolist(),
+        "degenerate_scans": np.flatnonzero(result.degenerate).tolist(),
+        "warnings": result.warnings,
+        "slam_ms_per_scan_median": float(np.median(result.seconds_per_scan) * 1e3),
+        "timings_s": {**(timings or {}), "slam": slam_s},
+        "config": cfg.model_dump(),
+    })
+    return result
+
+
+def evaluate_stage(out: Path) -> dict:
+    """metrics.json (DESIGN.md §6 ★ keys) against the scene's ground truth."""
+    run = RunDir(out)
+    tick = time.perf_counter()
+    _, truth = read_tum(run.ground_truth)
+    _, estimate = read_tum(run.trajectory)
+    _, odometry = read_tum(run.trajectory_odometry)
+    if not len(truth) == len(estimate) == len(odometry):
+        raise RadioslamError(f"{len(estimate)} poses against {len(truth)} true ones", file=run.trajectory,
+                             field="(poses)")
+    scene = load_scene(str(run.scene))
+    summary = json.loads(run.slam_summary.read_text(encoding="utf-8")) if run.slam_summary.exists() else {}
+    _, transform = align(estimate, truth)
+    points = transform_points(transform, read_map_points(run.map_cloud))
+    counts = [len(read_scan(run.scan_file(k))) for k in range(len(truth))] if run.scans.is_dir() else []
+    metrics = {
+        "ate_rmse_m": ate_rmse(estimate, truth),
+        "ate_rmse_odometry_m": ate_rmse(odometry, truth),
+        "rpe_rmse_m": rpe_rmse(estimate, truth),
+        "map_error_m": map_error(points, scene.segments),
+        "map_coverage": map_coverage(points, scene.segments),
+        "loop_closures": len(summary.get("loop_closures", [])),
+        "poses": len(truth),
+        "points_per_scan": float(np.mean(counts)) if counts else 0.0,
+        "skipped_scans": len(summary.get("skipped_scans", [])),
+        "degenerate_scans": len(summary.get("degenerate_scans", [])),
+        "slam_ms_per_scan": summary.get("slam_ms_per_scan_median"),
+        "timings_s": {**summary.get("timings_s", {}), "evaluate": time.perf_counter() - tick},
+    }
+    write_json(run.metrics, metrics)
+    return metrics

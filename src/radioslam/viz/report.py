@@ -1,0 +1,53 @@
+"""report.html: one self-contained page (figures inlined as base64 PNG) with the metrics
+table and the run's parameters, written atomically."""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+from pathlib import Path
+
+from radioslam.io import read_scan, read_tum
+from radioslam.io.atomic import atomic_write_text
+from radioslam.io.rundir import RunDir
+from radioslam.scene import load_scene
+from radioslam.viz.fig6 import fig6_figure
+
+
+def write_report(out: Path) -> Path:
+    run = RunDir(Path(out))
+    scene = load_scene(str(run.scene))
+    _, truth = read_tum(run.ground_truth)
+    _, estimate = read_tum(run.trajectory)
+    _, odometry = read_tum(run.trajectory_odometry)
+    scans = [read_scan(run.scan_file(k)) for k in range(len(truth))]
+    figure = run.root / "fig6.png"
+    fig6_figure(figure, scene.segments, truth, odometry, estimate, scans, title=scene.name)
+    metrics = json.loads(run.metrics.read_text(encoding="utf-8"))
+    summary = json.loads(run.slam_summary.read_text(encoding="utf-8"))
+    rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{html.escape(_fmt(v))}</td></tr>" for k, v in metrics.items())
+    image = base64.b64encode(figure.read_bytes()).decode()
+    page = f"""<!doctype html><html><head><meta charset="utf-8"><title>radioslam: {html.escape(scene.name)}</title>
+<style>body{{font-family:sans-serif;max-width:1200px;margin:2em auto}}td{{padding:2px 12px}}
+pre{{background:#f4f4f4;padding:1em;overflow:auto}}</style></head><body>
+<h1>radioslam run: {html.escape(scene.name)}</h1>
+<p>{len(truth)} poses. Figure: (a) reflection energy, (b) map without PGO, (c) map with PGO;
+true walls in grey, ground truth dashed.</p>
+<img alt="Fig. 6" style="width:100%" src="data:image/png;base64,{image}">
+<h2>Metrics</h2><table>{rows}</table>
+<h2>Warnings</h2><pre>{html.escape(chr(10).join(summary.get("warnings", [])) or "none")}</pre>
+<h2>SLAM parameters</h2><pre>{html.escape(json.dumps(summary.get("config", {}), indent=2))}</pre>
+<h2>Scene</h2><pre>{html.escape(run.scene.read_text(encoding="utf-8"))}</pre>
+</body></html>
+"""
+    atomic_write_text(run.report, page)
+    return run.report
+
+
+def _fmt(value) -> str:
+    if isinstance(value, float):
+        return f"{value:.4f}"
+    if isinstance(value, dict):
+        return ", ".join(f"{k} {v:.2f} s" if isinstance(v, float) else f"{k} {v}" for k, v in value.items())
+    return str(value)
