@@ -111,8 +111,8 @@ def _readme_block(marker: str) -> str:
 
 def test_readme_commands_use_real_options():
     main = _readme_block("main-command")
-    assert "pip install ." in main and "radioslam simulate paper-cnv" in main
-    help_text = run("simulate", "--help").stdout
+    assert "pip install ." in main and "radioslam demo" in main
+    help_text = run("demo", "--help").stdout
     for option in [w for w in main.split() if w.startswith("--")]:
         assert option in help_text
     assert "pytest" in _readme_block("test-command")
