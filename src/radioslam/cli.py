@@ -83,20 +83,12 @@ def simulate(
     save_iq: bool = typer.Option(False, "--save-iq", help="write SigMF captures/NNNN.sigmf-{meta,data}"),
 ) -> None:
     """Simulate a scene: scene.yaml, ground_truth.tum, calibration.json and, with --save-iq, SigMF captures."""
-    from radioslam.io import write_capture, write_tum
-    from radioslam.io.atomic import atomic_write_text
-    from radioslam.io.rundir import RunDir
-    from radioslam.scene import load_scene, scene_to_yaml
+    from radioslam.io import write_capture
+    from radioslam.pipeline import prepare_run
     from radioslam.sim import Simulator
 
-    loaded = load_scene(scene).with_radio(snr_db=snr_db)
-    run = RunDir(out)
-    run.root.mkdir(parents=True, exist_ok=True)
+    loaded, run, _ = prepare_run(scene, out, seed, snr_db)
     run.clear_captures()  # a run directory never mixes recordings of two runs
-    atomic_write_text(run.scene, scene_to_yaml(loaded))
-    write_tum(run.ground_truth, run.pose_timestamps(len(loaded.poses)), loaded.poses)
-    # calibration.json: eq. (11) on plate targets simulated with this scene's radio
-    _calibrate_simulated(loaded.radio, run.calibration, seed, None, None)
     if save_iq:
         sim = Simulator.from_scene(loaded)
         with progress() as bar:
@@ -106,12 +98,6 @@ def simulate(
                 bar.advance(task)
     err.print(f"wrote {run.root} ({len(loaded.poses)} poses{', IQ captures' if save_iq else ''})",
               markup=False)
-
-
-def _calibrate_simulated(radio, out: Path, seed: int, targets: int | None, spacing: float | None):
-    from radioslam.pipeline import calibrate_simulated
-
-    return calibrate_simulated(radio, out, seed, targets, spacing)
 
 
 @app.command()
@@ -128,12 +114,13 @@ def calibrate(
     """Estimate the hardware delay T_H from targets at known ranges, eq. (11)."""
     from radioslam.config import RadioConfig
     from radioslam.io import read_capture, write_calibration
+    from radioslam.pipeline import calibrate_simulated
     from radioslam.scene import load_scene
     from radioslam.sensing import estimate_hardware_delay
 
     if captures is None:
         radio = load_scene(scene).radio if scene else RadioConfig()
-        cal = _calibrate_simulated(radio, out, seed, targets, spacing)
+        cal = calibrate_simulated(radio, out, seed, targets, spacing)
     else:
         files = _capture_files(captures)
         values = _parse_ranges(ranges, len(files))

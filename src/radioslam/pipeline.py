@@ -44,16 +44,22 @@ def write_json(path: Path, doc: dict) -> None:
     atomic_write_text(path, json.dumps(doc, indent=2) + "\n")
 
 
-def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None) -> dict:
-    """scene.yaml, ground_truth.tum, calibration.json and scans/ (IQ sensed in memory); stage seconds."""
-    timings = {}
-    tick = time.perf_counter()
+def prepare_run(scene_name: str, out: Path, seed: int, snr_db: float | None):
+    """scene.yaml, ground_truth.tum and calibration.json (eq. (11) on plates simulated with this
+    scene's radio): the scene, the run directory and the calibration."""
     scene = load_scene(scene_name).with_radio(snr_db=snr_db)
     run = RunDir(out)
     run.root.mkdir(parents=True, exist_ok=True)
     atomic_write_text(run.scene, scene_to_yaml(scene))
     write_tum(run.ground_truth, run.pose_timestamps(len(scene.poses)), scene.poses)
-    cal = calibrate_simulated(scene.radio, run.calibration, seed)
+    return scene, run, calibrate_simulated(scene.radio, run.calibration, seed)
+
+
+def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None) -> dict:
+    """The files of :func:`prepare_run` and scans/ (IQ sensed in memory); stage seconds."""
+    timings = {}
+    tick = time.perf_counter()
+    scene, run, cal = prepare_run(scene_name, out, seed, snr_db)
     timings["calibrate"] = time.perf_counter() - tick
     receiver = Receiver(scene.radio, cal.hardware_delay_s)
     simulate_s = sense_s = 0.0

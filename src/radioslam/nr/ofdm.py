@@ -38,6 +38,14 @@ def symbol_starts(cp_lengths: np.ndarray, fft_size: int) -> np.ndarray:
     return np.cumsum(lengths, axis=-1) - lengths
 
 
+def _contiguous(subcarriers: np.ndarray) -> tuple[int, int]:
+    """The first index and the count of contiguous subcarriers (the factorizations need them)."""
+    p0, n = int(subcarriers[0]), len(subcarriers)
+    if not np.array_equal(subcarriers, p0 + np.arange(n)):
+        raise ValueError("subcarriers must be contiguous")
+    return p0, n
+
+
 def phase_ramp(shift: np.ndarray, subcarriers: np.ndarray, period: float) -> np.ndarray:
     """e^{−j2π·p·shift/period} for shifts (...) and contiguous subcarriers (n_sc,): shape (..., n_sc).
 
@@ -45,9 +53,7 @@ def phase_ramp(shift: np.ndarray, subcarriers: np.ndarray, period: float) -> np.
     p = p0 + B·a + c factors the exponential into two short ones, so only
     (A + B) exponentials per shift are evaluated instead of n_sc.
     """
-    p0, n = int(subcarriers[0]), len(subcarriers)
-    if not np.array_equal(subcarriers, p0 + np.arange(n)):
-        raise ValueError("subcarriers must be contiguous")
+    p0, n = _contiguous(subcarriers)
     block = max(1, int(np.sqrt(n)))
     n_blocks = -(-n // block)
     w = (-2j * np.pi / period) * np.asarray(shift, dtype=np.float64)[..., None]
@@ -65,9 +71,7 @@ class BlockedSpectrum:
     """
 
     def __init__(self, values: np.ndarray, subcarriers: np.ndarray, period: float):
-        p0, n = int(subcarriers[0]), len(subcarriers)
-        if not np.array_equal(subcarriers, p0 + np.arange(n)):
-            raise ValueError("subcarriers must be contiguous")
+        p0, n = _contiguous(subcarriers)
         self.block = max(1, int(np.ceil(np.sqrt(n))))
         n_blocks = -(-n // self.block)
         padded = np.zeros((values.shape[0], n_blocks * self.block), dtype=np.complex128)

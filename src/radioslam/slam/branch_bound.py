@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from radioslam.slam.correlative import candidate_cells
-from radioslam.slam.grid import LikelihoodGrid, normal_likelihood
+from radioslam.slam.grid import LikelihoodGrid
 
 
 @dataclass(frozen=True)
@@ -39,15 +39,9 @@ class BranchAndBound:
     def _scores(self, cells, normals, theta, nodes, level):
         """Mean bound (N,) of nodes (angle index, ox, oy) at ``level``; exact with normals at 0."""
         a, ox, oy = nodes[:, 0], nodes[:, 1], nodes[:, 2]
-        shape = self.grid.values.shape
         x, y = cells[a, :, 0] + ox[:, None], cells[a, :, 1] + oy[:, None]  # (N, P)
-        inside = (x >= 0) & (x < shape[0]) & (y >= 0) & (y < shape[1])
-        x, y = np.clip(x, 0, shape[0] - 1), np.clip(y, 0, shape[1] - 1)
-        like = np.where(inside, self.pyramid[level][x, y], 0.0)
-        if level == 0:
-            like = like * normal_likelihood(self.grid.normals[x, y], theta[a][:, None] + normals[None, :],
-                                            self.grid.normal_sigma)
-        return like.mean(axis=1)
+        world_normal = theta[a][:, None] + normals[None, :] if level == 0 else None
+        return self.grid.likelihood_at(x, y, world_normal, self.pyramid[level]).mean(axis=1)
 
     def _children(self, nodes, level, reach):
         half = 2 ** (level - 1)

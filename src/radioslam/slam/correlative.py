@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from radioslam.slam.grid import LIKELIHOOD_FLOOR, LikelihoodGrid, normal_likelihood
+from radioslam.slam.grid import LIKELIHOOD_FLOOR, LikelihoodGrid
 from radioslam.slam.se2 import rotation
 
 
@@ -36,28 +36,15 @@ def candidate_cells(grid: LikelihoodGrid, points: np.ndarray, pose: np.ndarray,
     return np.floor((rotated + pose[:2] - grid.origin) / grid.resolution).astype(np.int64)
 
 
-def shifted_cells(shape: tuple[int, int], cells: np.ndarray, dx: np.ndarray, dy: np.ndarray):
-    """Cells (A, P, 2) shifted by offsets dx (X,), dy (Y,): x, y (A, X, Y, P) clipped, and which lie inside."""
-    x = cells[:, None, None, :, 0] + dx[None, :, None, None]
-    y = cells[:, None, None, :, 1] + dy[None, None, :, None]
-    inside = (x >= 0) & (x < shape[0]) & (y >= 0) & (y < shape[1])
-    return np.clip(x, 0, shape[0] - 1), np.clip(y, 0, shape[1] - 1), inside
-
-
 def candidate_likelihoods(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, pose: np.ndarray,
-                          angles: np.ndarray, offsets: np.ndarray, values: np.ndarray | None = None) -> np.ndarray:
-    """Point likelihoods (A, X, Y, P) of every candidate: distance field × normal agreement.
-
-    ``values`` replaces the distance field (a max-pooled level for branch and bound, whose
-    bound stays admissible without the normal factor: it is ≤ 1).
-    """
+                          angles: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Point likelihoods (A, X, Y, P) of every candidate: distance field × normal agreement,
+    the scan rotated by each angle and its cells shifted by every x and y offset."""
     cells = candidate_cells(grid, points, pose, angles)
-    x, y, inside = shifted_cells(grid.values.shape, cells, offsets, offsets)
-    if values is not None:
-        return np.where(inside, values[x, y], 0.0)
+    x = cells[:, None, None, :, 0] + offsets[None, :, None, None]
+    y = cells[:, None, None, :, 1] + offsets[None, None, :, None]
     world_normal = (pose[2] + angles)[:, None, None, None] + normals[None, None, None, :]
-    agree = normal_likelihood(grid.normals[x, y], world_normal, grid.normal_sigma)
-    return np.where(inside, grid.values[x, y], 0.0) * agree
+    return grid.likelihood_at(x, y, world_normal)
 
 
 def correlative_match(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, prediction: np.ndarray,

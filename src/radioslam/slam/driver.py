@@ -66,17 +66,16 @@ class RadioSlam:
         seconds = []
         for k, scan in enumerate(scans):
             tick = time.perf_counter()
+            step = np.zeros(3) if velocity is None else velocity  # the constant-velocity motion
             # 1. a scan with too few points is skipped: the pose follows the constant-velocity model
             if len(scan) < cfg.min_points:
                 out.skipped[k] = True
                 out.warnings.append(f"scan {k}: {len(scan)} points (< {cfg.min_points}), skipped")
-                pose = np.zeros(3) if last is None else compose(estimates[last], velocity if velocity is not None
-                                                                else np.zeros(3))
-                odometry[k] = pose if last is None else compose(odometry[last], between(estimates[last], pose))
-                estimates[k] = pose
-                graph.add_pose(k, pose)
+                estimates[k] = np.zeros(3) if last is None else compose(estimates[last], step)
+                odometry[k] = np.zeros(3) if last is None else compose(odometry[last], step)
+                graph.add_pose(k, estimates[k])
                 if last is not None:
-                    graph.add_odometry(last, k, between(estimates[last], pose), np.diag(SKIPPED_SIGMA**2))
+                    graph.add_odometry(last, k, step, np.diag(SKIPPED_SIGMA**2))
                 last = k
                 seconds.append(time.perf_counter() - tick)
                 continue
@@ -90,7 +89,7 @@ class RadioSlam:
                     graph.add_odometry(last, k, np.zeros(3), np.diag(SKIPPED_SIGMA**2))
             else:
                 # 2. predict with constant velocity
-                prediction = compose(estimates[last], velocity if velocity is not None else np.zeros(3))
+                prediction = compose(estimates[last], step)
                 # 3. match against the local map of the latest scans: coarse correlative search, then refine
                 local_keys = kept[-cfg.local_map_scans:]
                 map_xy, map_n = fused_points(local_keys, estimates, points, normals, np.zeros(3))

@@ -65,14 +65,19 @@ class LikelihoodGrid:
         c = np.floor((points - self.origin) / self.resolution).astype(np.int64)
         return np.clip(c, 0, np.array(self.values.shape) - 1)
 
-    def inside(self, points: np.ndarray) -> np.ndarray:
-        c = np.floor((points - self.origin) / self.resolution)
-        return np.all((c >= 0) & (c < np.array(self.values.shape)), axis=-1)
-
-    def lookup(self, points: np.ndarray) -> np.ndarray:
-        """Nearest-cell likelihood of points (..., 2); 0 outside the grid."""
-        c = self.cells(points)
-        return np.where(self.inside(points), self.values[c[..., 0], c[..., 1]], 0.0)
+    def likelihood_at(self, x: np.ndarray, y: np.ndarray, world_normal: np.ndarray | None = None,
+                      values: np.ndarray | None = None) -> np.ndarray:
+        """The field at integer cells x, y (0 outside the grid), times the normal agreement of
+        points with world normals ``world_normal`` (left out when None). ``values`` replaces
+        the field (a max-pooled level, for branch and bound)."""
+        values = self.values if values is None else values
+        nx, ny = values.shape
+        inside = (x >= 0) & (x < nx) & (y >= 0) & (y < ny)
+        x, y = np.clip(x, 0, nx - 1), np.clip(y, 0, ny - 1)
+        like = np.where(inside, values[x, y], 0.0)
+        if world_normal is not None:
+            like = like * normal_likelihood(self.normals[x, y], world_normal, self.normal_sigma)
+        return like
 
     def normal_at(self, points: np.ndarray) -> np.ndarray:
         """World normal of the nearest map point to each point (..., 2)."""

@@ -46,9 +46,9 @@ def match_loop(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, pr
         return None
     # the response surface around the winner gives the covariance (Olson 2009 §IV)
     local = correlative_match(grid, points, normals, found.pose, 2 * grid.resolution, 2 * step, step)
-    pose = refine_pose(grid, points, normals, local.pose, grid.resolution, step)
     if local.score < cfg.loop_min_score:
         return None
+    pose = refine_pose(grid, points, normals, local.pose, grid.resolution, step)
     if mahalanobis2(pose, predicted, drift_covariance + local.covariance) > cfg.loop_gate_chi2:
         return None
     return LoopClosure(anchor, key, pose, local.covariance, local.score)
