@@ -127,9 +127,30 @@ def test_scan_with_too_few_points_is_skipped_and_the_trajectory_continues(rng):
     assert np.abs(rel[:, :2] - truth[:, :2]).max() < 0.1  # the skipped pose is interpolated by the motion model
 
 
-@pytest.mark.xfail(strict=True, reason="known gap (issue #4): the arcs of constant range move with the terminal, "
-                   "so matching them reports zero motion along a featureless corridor with confidence; "
-                   "needs point-to-plane scoring of arc points")
+def test_weak_direction_is_the_one_no_surface_constrains(rng):
+    """Zhang et al. 2016: J = Σ n nᵀ over the points' normals; its null space is unobserved."""
+    from radioslam.slam.degeneracy import line_normals, remap, weak_direction
+
+    tight = np.diag([1e-4, 1e-4, 1e-6])
+    xy = rng.normal(0, 3, (6, 2))
+    room = np.array([0.0, 0.0, np.pi / 2, np.pi / 2, np.nan, np.nan])  # two arcs at right angles
+    assert weak_direction(xy, room, 0.3, tight, 4.0) is None
+    corridor = np.array([np.pi / 2, np.pi / 2, -np.pi / 2, -np.pi / 2, np.nan, np.nan])
+    far = np.array([[0, 0], [0, 2], [3, 0], [3, 2], [20, 0], [-20, 0]])  # the unknown ones isolated
+    weak = weak_direction(far, corridor, 0.3, tight, 4.0)
+    assert abs(abs(weak @ [np.cos(0.3), np.sin(0.3)]) - 1) < 1e-9  # along the corridor, in the world frame
+    # points without a specular normal lend the normal of the line through their neighbours
+    wall = np.column_stack([np.linspace(0, 0.5, 6), np.linspace(0, 1, 6)])
+    assert np.allclose(np.tan(line_normals(wall) - np.pi / 2), 2.0)
+    assert weak_direction(np.vstack([far, wall + [0, 5]]), np.concatenate([corridor, np.full(6, np.nan)]), 0.0,
+                          tight, 4.0) is None  # a steep wall fixes the corridor's axis
+    # the match's own covariance, elongated 10:1 along y, is the other trigger
+    assert abs(weak_direction(xy, room, 0.0, np.diag([1e-4, 1e-2, 1e-6]), 4.0)[1]) == pytest.approx(1)
+    pose, cov = remap(np.array([1.0, 2.0, 0.1]), tight, np.array([3.0, 5.0, 0.0]), np.array([1.0, 0.0]), 0.5)
+    assert pose == pytest.approx([3.0, 2.0, 0.1])  # x from the prediction, y and θ from the match
+    assert cov[0, 0] == pytest.approx(0.25 + 1e-4) and cov[1, 1] == pytest.approx(1e-4)
+
+
 def test_featureless_corridor_is_flagged_degenerate():
     """Simulated radio scans of a long straight corridor: each wall is an arc at the
     perpendicular foot, the same at every pose, so nothing fixes the motion along it."""
@@ -147,4 +168,8 @@ def test_featureless_corridor_is_flagged_degenerate():
     scans = [receiver.sense(c).scan for c in Simulator.from_scene(scene).simulate(3)]
     result = RadioSlam(SlamConfig()).run(scans)
     assert result.degenerate[1:].all()
-    assert any("degenerate" in w for w in result.warnings)
+    flagged = [w for w in result.warnings if "degenerate" in w]
+    assert len(flagged) == 4 and all(w.endswith(("along 0° (predicted instead)", "along 180° (predicted instead)",
+                                                   "along -180° (predicted instead)")) for w in flagged)
+    # what the walls do fix stays right: the lateral position and the heading
+    assert np.abs(result.poses[:, 1]).max() < 0.05 and np.abs(result.poses[:, 2]).max() < np.radians(0.5)

@@ -32,4 +32,6 @@ class SlamConfig(BaseModel):
     loop_gate_chi2: float = Field(16.27, gt=0)  # χ²(3) at 99.9 %: consistency with the graph
     # pose graph
     gnc: bool = True  # loop factors robust to false closures (GncLMOptimizer)
-    degenerate_ratio: float = Field(4.0, gt=1)  # covariance eigenvalue ratio flagged as degenerate
+    # a match is degenerate when its surfaces' information (Σ n nᵀ) or its covariance is this
+    # elongated (ratio of standard deviations): a direction nothing fixes
+    degenerate_ratio: float = Field(4.0, gt=1)

@@ -16,6 +16,7 @@ from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.config import SlamConfig
 from radioslam.slam.correlative import correlative_match
+from radioslam.slam.degeneracy import remap, weak_direction
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.loop_closure import BRANCH_LEVELS, LoopClosure, match_loop
 from radioslam.slam.normals import specular_normals
@@ -34,7 +35,7 @@ class SlamResult:
     poses: np.ndarray  # (P, 3) with loop closure and pose graph optimization
     odometry: np.ndarray  # (P, 3) front end only
     skipped: np.ndarray  # (P,) scans with too few points
-    degenerate: np.ndarray  # (P,) matches whose covariance is degenerate (e.g. a featureless corridor)
+    degenerate: np.ndarray  # (P,) matches that leave a direction unobserved (e.g. a featureless corridor)
     match_score: np.ndarray  # (P,) normalized front-end score, NaN where not matched
     loops: list[LoopClosure] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
@@ -96,10 +97,14 @@ class RadioSlam:
                 grid = LikelihoodGrid.from_points(map_xy, res, sigma, margin + FIRST_WINDOW_M, map_n, nsig)
                 pose, cov, score = self._front_end(grid, xy, phi, prediction, first=velocity is None)
                 out.match_score[k] = score
-                out.degenerate[k] = degenerate(cov, cfg.degenerate_ratio)
-                if out.degenerate[k]:
-                    out.warnings.append(f"scan {k}: degenerate match (featureless surroundings), pose uncertain")
-                # 4. odometry factor from the previous pose
+                # 4. a direction the walls cannot fix keeps the prediction there (Zhang et al. 2016)
+                weak = weak_direction(xy, phi, pose[2], cov, cfg.degenerate_ratio)
+                if weak is not None:
+                    out.degenerate[k] = True
+                    pose, cov = remap(pose, cov, prediction, weak, SKIPPED_SIGMA[0])
+                    out.warnings.append(f"scan {k}: degenerate match, nothing fixes the position along "
+                                        f"{np.degrees(np.arctan2(weak[1], weak[0])):.0f}° (predicted instead)")
+                # 5. odometry factor from the previous pose
                 rel = between(estimates[last], pose)
                 odo_cov[k] = local_covariance(cov, estimates[last][2])
                 graph.add_pose(k, pose)
@@ -109,17 +114,17 @@ class RadioSlam:
                 estimates[k] = pose
             points[k], normals[k] = xy, phi
             kept.append(k)
-            # 5. submaps of N consecutive scans
+            # 6. submaps of N consecutive scans
             if not submaps or len(submaps[-1].keys) >= cfg.submap_scans:
                 submaps.append(Submap())
             submaps[-1].keys.append(k)
-            # 6. loop closure against older submaps near the current pose
+            # 7. loop closure against older submaps near the current pose
             found = self._close_loops(k, submaps, estimates, points, normals, odo_cov, kept, margin)
             for loop in found:
                 loop = self.loop_hook(loop) if self.loop_hook else loop
                 graph.add_loop(loop.anchor, loop.key, loop.relative, loop.covariance)
                 out.loops.append(loop)
-            # 7. optimize the pose graph whenever loops were added
+            # 8. optimize the pose graph whenever loops were added
             if found:
                 estimates.update(graph.optimize(cfg.gnc))
             last = k
@@ -167,8 +172,3 @@ def drift_covariance(odo_cov: dict[int, np.ndarray], keys: list[int], distance: 
     total = total + np.diag([total[2, 2] * distance**2] * 2 + [0.0])
     return total
 
-
-def degenerate(covariance: np.ndarray, ratio: float) -> bool:
-    """Whether the position uncertainty is elongated beyond ``ratio`` (standard deviations)."""
-    eig = np.linalg.eigvalsh(covariance[:2, :2])
-    return bool(np.sqrt(eig[-1] / max(eig[0], 1e-18)) > ratio)
