@@ -29,10 +29,25 @@ def test_se2_compose_between_inverse(a, b):
 
 def test_pyramid_level_is_the_max_over_its_window(rng):
     grid = LikelihoodGrid(rng.random((37, 29)), np.zeros(2), 0.1, np.full((37, 29), np.nan), np.inf)
-    for h, level in enumerate(grid.pyramid(4)):
+    for h, (level, plane) in enumerate(grid.pyramid(4)):
         w = 2**h
         brute = np.array([[grid.values[i:i + w, j:j + w].max() for j in range(29)] for i in range(37)])
-        assert np.array_equal(level, brute)
+        assert np.array_equal(level, brute) and np.array_equal(plane, brute)  # no plane field: the same
+
+
+def test_plane_field_ignores_the_offset_along_a_wall_within_reach():
+    """Point-to-plane (Chen & Medioni 1992): a wall stretch y = 0 (normal +y) scores a point
+    by its offset along y only, up to ``plane_reach`` from the nearest wall point."""
+    wall = np.column_stack([np.arange(0.0, 1.0, 0.05) + 0.025, np.full(20, 0.025)])
+    grid = LikelihoodGrid.from_points(wall, 0.05, 0.05, 1.0, np.full(20, np.pi / 2), np.radians(1.0), 0.5)
+    probe = np.array([[1.3, 0.025], [1.3, 0.125], [1.7, 0.025], [0.5, 0.125]])  # beyond the end, above it
+    c = grid.cells(probe)
+    plane = grid.plane[c[:, 0], c[:, 1]]
+    point = grid.values[c[:, 0], c[:, 1]]
+    assert plane[0] == pytest.approx(1.0)  # 0.3 m past the end, on the line: within reach
+    assert plane[1] == pytest.approx(np.exp(-0.5 * (0.1 / 0.05) ** 2))  # 0.1 m off the line
+    assert plane[2] == pytest.approx(point[2]) and point[2] < 1e-6  # 0.7 m past the end: the plain distance
+    assert plane[3] == pytest.approx(plane[1]) and plane[3] >= point[3] - 1e-12  # above the middle: the offset
 
 
 def room_points(rng, n=400):

@@ -98,3 +98,86 @@ def test_run_directory_files_are_complete_and_consistent(demo_run):
 
     assert len(read_map_points(out / "map.ply")) == pytest.approx(60 * 36, rel=0.2)
     assert not list(out.glob(".*.tmp"))  # no half-written file left behind
+
+
+def test_false_loop_closures_do_not_spoil_the_optimized_trajectory(demo_run):
+    """Issue #4: with loop closures replaced by wrong ones (every fifth from the first on,
+    so the first of the run is wrong), the robust pose graph keeps the ATE within 1.5× the
+    clean run's."""
+    from dataclasses import replace
+
+    from radioslam.io.rundir import RunDir
+    from radioslam.pipeline import read_scans
+    from radioslam.slam import RadioSlam
+    from radioslam.slam.se2 import compose
+
+    out, _ = demo_run
+    scans = read_scans(RunDir(out))
+    _, truth = read_tum(RunDir(out).ground_truth)
+    clean = RadioSlam().run(scans)
+    seen = []
+
+    def corrupt(loop):
+        seen.append(loop)
+        if (len(seen) - 1) % 5:
+            return loop
+        return replace(loop, relative=compose(loop.relative, np.array([1.5, -1.0, np.radians(25.0)])))
+
+    spoiled = RadioSlam(loop_hook=corrupt).run(scans)
+    assert len(seen) >= 2 and len(spoiled.loops) == len(seen)
+    clean_ate, spoiled_ate = ate_rmse(clean.poses, truth), ate_rmse(spoiled.poses, truth)
+    print(f"loops {len(seen)}, wrong {len(seen[::5])}: ATE clean {clean_ate:.3f} m, spoiled {spoiled_ate:.3f} m")
+    assert spoiled_ate <= 1.5 * clean_ate
+
+
+def _cli(*args):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "radioslam.cli", *args], capture_output=True, text=True, timeout=300)
+
+
+def _copy(src, dst, *keep):
+    import shutil
+
+    dst.mkdir(parents=True, exist_ok=True)
+    for name in keep:
+        (shutil.copytree if (src / name).is_dir() else shutil.copyfile)(src / name, dst / name)
+    return dst
+
+
+def test_slam_and_evaluate_bad_input_exit_2_with_one_line(demo_run, tmp_path):
+    from radioslam.io import write_scan
+    from radioslam.sensing import Scan
+
+    out, _ = demo_run
+    cases = []
+    no_scans = _copy(out, tmp_path / "no-scans", "scene.yaml", "ground_truth.tum")
+    cases.append((("slam", str(no_scans)), "scans"))
+    empty = _copy(out, tmp_path / "empty", "scene.yaml", "ground_truth.tum", "scans")
+    for f in (empty / "scans").glob("*.ply"):
+        write_scan(f, Scan.empty())
+    cases.append((("slam", str(empty)), "nothing to map"))
+    no_traj = _copy(out, tmp_path / "no-trajectory", "scene.yaml", "ground_truth.tum", "scans")
+    cases.append((("evaluate", str(no_traj)), "trajectory.tum"))
+    nan = _copy(out, tmp_path / "nan", "scene.yaml", "ground_truth.tum", "trajectory.tum", "trajectory_odometry.tum")
+    lines = (nan / "trajectory.tum").read_text().splitlines()
+    lines[3] = " ".join(lines[3].split()[:1] + ["nan"] + lines[3].split()[2:])
+    (nan / "trajectory.tum").write_text("\n".join(lines) + "\n")
+    cases.append((("evaluate", str(nan)), "trajectory.tum"))
+    for args, fragment in cases:
+        done = _cli(*args)
+        assert done.returncode == 2, (args, done.stderr)
+        assert len(done.stderr.strip().splitlines()) == 1 and "Traceback" not in done.stderr, done.stderr
+        assert fragment in done.stderr, done.stderr
+    assert not (empty / "trajectory.tum").exists()  # nothing half-written that looks complete
+
+
+def test_reproduce_fig6_draws_the_figure_and_prints_the_starred_keys(tmp_path):
+    done = _cli("reproduce", "fig6", "--out", str(tmp_path), "--json", "--seed", "1")
+    assert done.returncode == 0, done.stderr
+    doc = json.loads(done.stdout)
+    assert {"ate_rmse_m", "ate_rmse_odometry_m", "loop_closures", "map_error_m", "map_coverage"} <= doc.keys()
+    assert doc["ate_rmse_m"] <= 0.10
+    assert (tmp_path / "fig6.png").stat().st_size > 10_000 and (tmp_path / "fig6.csv").exists()
+    assert (tmp_path / "fig6-run" / "report.html").exists()

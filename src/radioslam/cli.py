@@ -280,13 +280,13 @@ def demo(
 @app.command()
 @one_line_errors
 def reproduce(
-    experiment: str = typer.Argument(..., help="table1, fig5, fig8 or all"),
+    experiment: str = typer.Argument(..., help="table1, fig5, fig8, fig6 or all"),
     out: Path = typer.Option(..., "--out", help="directory for the figure (PNG) and table (CSV, Markdown)"),
     json_out: bool = typer.Option(False, "--json", help="print one JSON object of the results on stdout"),
     seed: int = typer.Option(0, "--seed", min=0),
     trials: Optional[int] = typer.Option(None, "--trials", min=1, help="Monte Carlo trials (default per experiment)"),
 ) -> None:
-    """Reproduce the paper's experiments: Table I, Fig. 5, Fig. 8."""
+    """Reproduce the paper's experiments: Table I, Fig. 5, Fig. 8 and Fig. 6 (SLAM on paper-cnv)."""
     import json
 
     from radioslam.errors import RadioslamError

@@ -95,7 +95,10 @@ def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = 
     run = RunDir(out)
     scans = read_scans(run)
     tick = time.perf_counter()
-    result = RadioSlam(cfg).run(scans)
+    try:
+        result = RadioSlam(cfg).run(scans)
+    except RadioslamError as exc:  # the driver knows the field and reason, this stage the files
+        raise RadioslamError(exc.reason, file=exc.file or run.scans, field=exc.field) from None
     slam_s = time.perf_counter() - tick
     cfg = cfg or SlamConfig()
     stamps = run.pose_timestamps(len(scans))

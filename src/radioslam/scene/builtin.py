@@ -10,6 +10,18 @@ glass-door    the paper's Fig. 4 experiment: an open glass door on the array nor
               the door gap, side walls at ±7.5 m and the wall behind the terminal at −8 m.
 single-plate  Table I: a 1 m metal plate on the array normal at a configurable range
               (``single-plate:6.4``; 4 m by default), nothing else.
+corridor-loop a 4 m wide corridor around a 14 m × 6 m block of rooms (doors open onto
+              the corridor, partitions and glass inside), walked 1.2 times around on its
+              centre line with rounded corners, slowing in the turns, its speed varying ±20 %.
+shelf-hall    a 20 m × 16 m hall with two rows of metal shelves (a cross aisle in each)
+              and two concrete pillars; the terminal goes down the central aisle, turns
+              around at the end and comes back 0.8 m to the side, then along the north
+              aisle and back the same way.
+
+Both keep the terminal 2 m from every wall: nearer walls fall inside the receiver's
+leakage gate (1.5 m) and only the skirts of their echoes beyond it are seen.
+
+The last two were not used to tune anything (issue #4: scenes the SLAM was not tuned on).
 """
 
 from __future__ import annotations
@@ -21,6 +33,7 @@ import numpy as np
 from radioslam.scene.errors import SceneError
 from radioslam.scene.loader import scene_from_mapping
 from radioslam.scene.model import Scene
+from radioslam.scene.trajectory import waypoint_poses
 
 
 def _wall(points, material: str) -> dict:
@@ -66,10 +79,66 @@ def single_plate(range_m: float = 4.0) -> Scene:
     }, f"builtin:single-plate:{range_m:g}")
 
 
+def _rectangle(x0: float, y0: float, x1: float, y1: float) -> list[tuple[float, float]]:
+    return [(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)]
+
+
+def _path(waypoints) -> list[list[float]]:
+    poses = waypoint_poses(np.array(waypoints, dtype=float), step_m=0.5, turn_step_deg=12.0, corner_radius_m=1.0,
+                           speed_variation=0.2)
+    return np.round(poses, 6).tolist()
+
+
+def _runs(points: list, material: str) -> list[dict]:
+    """Walls along ``points``, broken where an entry is None (a door)."""
+    out, run = [], []
+    for q in [*points, None]:
+        if q is not None:
+            run.append(q)
+            continue
+        if len(run) >= 2:
+            out.append(_wall(run, material))
+        run = []
+    return out
+
+
+def corridor_loop() -> Scene:
+    # the block's outer wall, with a 1 m door into each of its four rooms
+    block = [*_runs([(-7.0, -3.0), (-4.5, -3.0), None, (-3.5, -3.0), (2.5, -3.0), None, (3.5, -3.0), (7.0, -3.0),
+                     (7.0, 3.0), (4.5, 3.0), None, (3.5, 3.0), (-2.5, 3.0), None, (-3.5, 3.0), (-7.0, 3.0),
+                     (-7.0, -3.0)], "concrete")]
+    inside = [_wall([(-3.0, -3.0), (-3.0, 3.0)], "concrete"), _wall([(3.0, -3.0), (3.0, 3.0)], "concrete"),
+              _wall([(-3.0, 0.0), (3.0, 0.0)], "glass"), _wall([(-7.0, 0.5), (-5.0, 0.5)], "concrete")]
+    return scene_from_mapping({
+        "version": 1, "name": "corridor-loop",
+        "walls": [_wall(_rectangle(-11.0, -7.0, 11.0, 7.0), "concrete"), *block, *inside],
+        "trajectory": {"poses": _path([(-9.0, -5.0), (9.0, -5.0), (9.0, 5.0), (-9.0, 5.0), (-9.0, -5.0),
+                                       (-2.0, -5.0)])},
+        "radio": {"snr_db": 10.0},
+    }, "builtin:corridor-loop")
+
+
+def shelf_hall() -> Scene:
+    shelves = [_wall(_rectangle(x0, y0, x1, y0 + 0.8), "metal")
+               for y0 in (-3.0, 2.2) for x0, x1 in ((-5.5, -0.6), (0.6, 5.5))]
+    pillars = [_wall(_rectangle(x - 0.25, y - 0.25, x + 0.25, y + 0.25), "concrete") for x in (-3.0, 3.0)
+               for y in (-6.0,)]
+    return scene_from_mapping({
+        "version": 1, "name": "shelf-hall",
+        "walls": [_wall(_rectangle(-10.0, -8.0, 10.0, 8.0), "concrete"), *shelves, *pillars],
+        "trajectory": {"poses": _path([(-8.0, -0.2), (7.6, -0.2), (8.0, -0.2), (8.0, 0.6), (7.6, 0.6),
+                                       (-8.0, 0.6), (-8.0, 5.1), (7.6, 5.1), (8.0, 5.1), (8.0, 5.9), (7.6, 5.9),
+                                       (-8.0, 5.9)])},
+        "radio": {"snr_db": 10.0},
+    }, "builtin:shelf-hall")
+
+
 BUILTIN_SCENES: dict[str, tuple[Callable[..., Scene], str]] = {
     "paper-cnv": (paper_cnv, "paper Fig. 6: 16 m concrete room, concrete 'CNV', 60 poses on a 5 m circle"),
     "glass-door": (glass_door, "paper Fig. 4: open glass door on the normal, concrete wall at 15 m"),
     "single-plate": (single_plate, "Table I: 1 m metal plate on the normal; 'single-plate:R' sets R m"),
+    "corridor-loop": (corridor_loop, "4 m corridor around a block of rooms, 1.2 laps, rounded corners, ±20 % speed"),
+    "shelf-hall": (shelf_hall, "20 m hall, two rows of metal shelves, down and back two aisles"),
 }
 
 

@@ -41,7 +41,7 @@ class BranchAndBound:
         a, ox, oy = nodes[:, 0], nodes[:, 1], nodes[:, 2]
         x, y = cells[a, :, 0] + ox[:, None], cells[a, :, 1] + oy[:, None]  # (N, P)
         world_normal = theta[a][:, None] + normals[None, :] if level == 0 else None
-        return self.grid.likelihood_at(x, y, world_normal, self.pyramid[level]).mean(axis=1)
+        return self.grid.likelihood_at(x, y, ~np.isnan(normals), world_normal, self.pyramid[level]).mean(axis=1)
 
     def _children(self, nodes, level, reach):
         half = 2 ** (level - 1)

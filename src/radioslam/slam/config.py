@@ -16,6 +16,9 @@ class SlamConfig(BaseModel):
     sigma_m: float = Field(0.05, gt=0)
     # specular normals agree to ±σ_ψ (arc peaks locate a wall normal to ~0.1°; the coarse search steps 0.5°)
     normal_sigma_deg: float = Field(1.0, gt=0)
+    # points with a normal are scored point-to-plane within this distance of the nearest map point
+    plane_reach_m: float = Field(0.5, ge=0)
+    project_arcs: bool = True  # arc points placed where their beam meets the arc's wall line
     min_points: int = Field(8, ge=3)  # a scan with fewer points is skipped with a warning
     submap_scans: int = Field(7, ge=1)  # consecutive scans per submap (MATLAB lidarSLAM's default)
     local_map_scans: int = Field(10, ge=1)  # the front end matches against this many latest scans

@@ -44,7 +44,7 @@ def candidate_likelihoods(grid: LikelihoodGrid, points: np.ndarray, normals: np.
     x = cells[:, None, None, :, 0] + offsets[None, :, None, None]
     y = cells[:, None, None, :, 1] + offsets[None, None, :, None]
     world_normal = (pose[2] + angles)[:, None, None, None] + normals[None, None, None, :]
-    return grid.likelihood_at(x, y, world_normal)
+    return grid.likelihood_at(x, y, ~np.isnan(normals), world_normal)
 
 
 def correlative_match(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, prediction: np.ndarray,

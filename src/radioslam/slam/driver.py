@@ -17,9 +17,10 @@ from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.config import SlamConfig
 from radioslam.slam.correlative import correlative_match
 from radioslam.slam.degeneracy import remap, weak_direction
+from radioslam.slam.errors import SlamError
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.loop_closure import BRANCH_LEVELS, LoopClosure, match_loop
-from radioslam.slam.normals import specular_normals
+from radioslam.slam.normals import specular_normals, wall_points
 from radioslam.slam.pose_graph import PoseGraph, local_covariance
 from radioslam.slam.refine import refine_pose
 from radioslam.slam.se2 import between, compose
@@ -52,6 +53,9 @@ class RadioSlam:
 
     def run(self, scans: list[Scan]) -> SlamResult:
         cfg, n = self.cfg, len(scans)
+        if not any(len(s) >= cfg.min_points for s in scans):
+            raise SlamError(f"none of the {n} scans has {cfg.min_points} points or more: nothing to map",
+                            field="(points)")
         res, sigma, nsig = cfg.resolution_m, cfg.sigma_m, np.radians(cfg.normal_sigma_deg)
         margin = max(cfg.window_m, cfg.loop_window_m) + 3 * sigma
         graph = PoseGraph()
@@ -80,7 +84,8 @@ class RadioSlam:
                 last = k
                 seconds.append(time.perf_counter() - tick)
                 continue
-            xy, phi = scan.xy, specular_normals(scan)
+            phi = specular_normals(scan)
+            xy = wall_points(scan, phi) if cfg.project_arcs else scan.xy
             if not kept:
                 # the first scan defines the map frame
                 estimates[k] = np.zeros(3) if last is None else estimates[last]
@@ -94,7 +99,8 @@ class RadioSlam:
                 # 3. match against the local map of the latest scans: coarse correlative search, then refine
                 local_keys = kept[-cfg.local_map_scans:]
                 map_xy, map_n = fused_points(local_keys, estimates, points, normals, np.zeros(3))
-                grid = LikelihoodGrid.from_points(map_xy, res, sigma, margin + FIRST_WINDOW_M, map_n, nsig)
+                grid = LikelihoodGrid.from_points(map_xy, res, sigma, margin + FIRST_WINDOW_M, map_n, nsig,
+                                                  cfg.plane_reach_m)
                 pose, cov, score = self._front_end(grid, xy, phi, prediction, first=velocity is None)
                 out.match_score[k] = score
                 # 4. a direction the walls cannot fix keeps the prediction there (Zhang et al. 2016)
@@ -118,8 +124,9 @@ class RadioSlam:
             if not submaps or len(submaps[-1].keys) >= cfg.submap_scans:
                 submaps.append(Submap())
             submaps[-1].keys.append(k)
-            # 7. loop closure against older submaps near the current pose
-            found = self._close_loops(k, submaps, estimates, points, normals, odo_cov, kept, margin)
+            # 7. loop closure against older submaps near the current pose (a degenerate scan cannot close one)
+            found = [] if out.degenerate[k] else self._close_loops(k, submaps, estimates, points, normals, odo_cov,
+                                                                   kept, margin)
             for loop in found:
                 loop = self.loop_hook(loop) if self.loop_hook else loop
                 graph.add_loop(loop.anchor, loop.key, loop.relative, loop.covariance)
@@ -138,11 +145,14 @@ class RadioSlam:
     def _front_end(self, grid, xy, phi, prediction, first: bool):
         cfg = self.cfg
         step = np.radians(cfg.angle_step_deg)
-        if first:  # no velocity yet: a wide exact search
+        window, turn = cfg.window_m, np.radians(cfg.window_deg)
+        match = None if first else correlative_match(grid, xy, phi, prediction, window, turn, step)
+        if match is None or match.at_edge:
+            # no velocity yet, or the motion left the window (a turn begins): a wide exact search first
             found = BranchAndBound(grid, BRANCH_LEVELS).match(xy, phi, prediction, FIRST_WINDOW_M,
                                                                np.radians(FIRST_WINDOW_DEG), step, 0.0)
-            prediction = found.pose if found.pose is not None else prediction
-        match = correlative_match(grid, xy, phi, prediction, cfg.window_m, np.radians(cfg.window_deg), step)
+            start = found.pose if found.pose is not None else prediction
+            match = correlative_match(grid, xy, phi, start, window, turn, step)
         pose = refine_pose(grid, xy, phi, match.pose, cfg.resolution_m, step)
         return pose, match.covariance, match.score
 
@@ -155,7 +165,7 @@ class RadioSlam:
             if np.min(np.linalg.norm(members - current[:2], axis=1)) > cfg.loop_radius_m:
                 continue
             grid = submap_grid(s, estimates, points, normals, cfg.resolution_m, cfg.sigma_m, margin,
-                               np.radians(cfg.normal_sigma_deg))
+                               np.radians(cfg.normal_sigma_deg), cfg.plane_reach_m)
             predicted = between(estimates[s.anchor], current)
             drift = drift_covariance(odo_cov, [m for m in kept if s.anchor < m <= k],
                                      np.linalg.norm(predicted[:2]))

@@ -11,6 +11,13 @@ Radio points also carry the specular normal of the surface they came from
 nearest map point, and a point whose normal disagrees by Δψ is scored
 L·exp(−Δψ²/2σ_ψ²). Where either normal is unknown the factor is 1. This term is what
 makes rotation observable: a wall's arc of points is blind to it.
+
+A point with a normal is scored point-to-plane, as in point-to-plane ICP (Chen &
+Medioni 1992): d is then the offset along the nearest map point's normal,
+|n·(c − q)|, for cells within ``plane_reach`` of that point (beyond, the plain
+distance). A wall seen from two poses is two stretches of one line, and the offset
+along it must not count: it is what the terminal's motion along the wall changes.
+Both fields are kept (``values``: point-to-point, ``plane``: point-to-plane).
 """
 
 from __future__ import annotations
@@ -40,10 +47,16 @@ class LikelihoodGrid:
     resolution: float
     normals: np.ndarray  # (NX, NY) world normal of the nearest map point, NaN: unknown
     normal_sigma: float
+    plane: np.ndarray | None = None  # (NX, NY) point-to-plane field; None: as ``values``
+
+    @property
+    def plane_values(self) -> np.ndarray:
+        return self.values if self.plane is None else self.plane
 
     @classmethod
     def from_points(cls, points: np.ndarray, resolution: float, sigma: float, margin: float,
-                    normals: np.ndarray | None = None, normal_sigma: float = np.inf) -> "LikelihoodGrid":
+                    normals: np.ndarray | None = None, normal_sigma: float = np.inf,
+                    plane_reach: float = 0.0) -> "LikelihoodGrid":
         """The field of map points (P, 2) with their world normals (P,), ``margin`` beyond them."""
         if len(points) == 0:
             raise SlamError("cannot build a likelihood grid from no points", field="points")
@@ -57,24 +70,32 @@ class LikelihoodGrid:
             cell_normal[cells[:, 0], cells[:, 1]] = normals
         # distance from each cell centre to the nearest hit cell centre, and which cell that is
         d, (ix, iy) = distance_transform_edt(~hit, return_indices=True)
-        return cls(np.exp(-0.5 * (d * resolution / sigma) ** 2), origin, resolution, cell_normal[ix, iy],
-                   normal_sigma)
+        d = d * resolution
+        nearest_normal = cell_normal[ix, iy]
+        # point-to-plane: the offset along the nearest map point's normal, within reach of it
+        gx, gy = np.indices(shape)
+        along = np.abs(np.cos(nearest_normal) * (gx - ix) + np.sin(nearest_normal) * (gy - iy)) * resolution
+        plane = np.where(np.isnan(nearest_normal) | (d > plane_reach), d, along)
+        return cls(np.exp(-0.5 * (d / sigma) ** 2), origin, resolution, nearest_normal, normal_sigma,
+                   np.exp(-0.5 * (plane / sigma) ** 2))
 
     def cells(self, points: np.ndarray) -> np.ndarray:
         """Integer cells (..., 2) of points (..., 2), clipped to the grid."""
         c = np.floor((points - self.origin) / self.resolution).astype(np.int64)
         return np.clip(c, 0, np.array(self.values.shape) - 1)
 
-    def likelihood_at(self, x: np.ndarray, y: np.ndarray, world_normal: np.ndarray | None = None,
-                      values: np.ndarray | None = None) -> np.ndarray:
-        """The field at integer cells x, y (0 outside the grid), times the normal agreement of
-        points with world normals ``world_normal`` (left out when None). ``values`` replaces
-        the field (a max-pooled level, for branch and bound)."""
-        values = self.values if values is None else values
-        nx, ny = values.shape
+    def likelihood_at(self, x: np.ndarray, y: np.ndarray, on_plane: np.ndarray,
+                      world_normal: np.ndarray | None = None,
+                      fields: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+        """The field at integer cells x, y (0 outside the grid), point-to-plane where
+        ``on_plane`` (broadcast against x), times the normal agreement of points with world
+        normals ``world_normal`` (left out when None). ``fields`` replaces the (point,
+        plane) fields (a max-pooled level, for branch and bound)."""
+        point, plane = (self.values, self.plane_values) if fields is None else fields
+        nx, ny = point.shape
         inside = (x >= 0) & (x < nx) & (y >= 0) & (y < ny)
         x, y = np.clip(x, 0, nx - 1), np.clip(y, 0, ny - 1)
-        like = np.where(inside, values[x, y], 0.0)
+        like = np.where(inside, np.where(on_plane, plane[x, y], point[x, y]), 0.0)
         if world_normal is not None:
             like = like * normal_likelihood(self.normals[x, y], world_normal, self.normal_sigma)
         return like
@@ -84,29 +105,37 @@ class LikelihoodGrid:
         c = self.cells(points)
         return self.normals[c[..., 0], c[..., 1]]
 
-    def interpolate(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Bilinear likelihood (P,) between cell centres and its gradient (P, 2) in world units."""
+    def interpolate(self, points: np.ndarray, on_plane: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Bilinear likelihood (P,) between cell centres and its gradient (P, 2) in world
+        units, point-to-plane where ``on_plane`` (P,)."""
         u = (points - self.origin) / self.resolution - 0.5
         i0 = np.floor(u).astype(np.int64)
         f = u - i0
         hi = np.array(self.values.shape) - 1
         x0, y0 = np.clip(i0[:, 0], 0, hi[0]), np.clip(i0[:, 1], 0, hi[1])
         x1, y1 = np.clip(i0[:, 0] + 1, 0, hi[0]), np.clip(i0[:, 1] + 1, 0, hi[1])
-        v = self.values
-        v00, v10, v01, v11 = v[x0, y0], v[x1, y0], v[x0, y1], v[x1, y1]
+
+        def corner(x, y):
+            return np.where(on_plane, self.plane_values[x, y], self.values[x, y])
+
+        v00, v10, v01, v11 = corner(x0, y0), corner(x1, y0), corner(x0, y1), corner(x1, y1)
         fx, fy = f[:, 0], f[:, 1]
         value = (v00 * (1 - fx) + v10 * fx) * (1 - fy) + (v01 * (1 - fx) + v11 * fx) * fy
         dx = ((v10 - v00) * (1 - fy) + (v11 - v01) * fy) / self.resolution
         dy = ((v01 - v00) * (1 - fx) + (v11 - v10) * fx) / self.resolution
         return value, np.stack([dx, dy], axis=1)
 
-    def pyramid(self, levels: int) -> list[np.ndarray]:
-        """Max-pooled grids: level h holds the max over cells [i, i + 2^h) × [j, j + 2^h)."""
-        grids = [self.values]
-        for h in range(1, levels + 1):
-            width = 2**h
-            # a window [i, i + w) is maximum_filter1d's centred window shifted by (w − 1) // 2
-            g = maximum_filter1d(self.values, width, axis=0, mode="constant", cval=0.0, origin=-(width // 2))
-            g = maximum_filter1d(g, width, axis=1, mode="constant", cval=0.0, origin=-(width // 2))
-            grids.append(g)
-        return grids
+    def pyramid(self, levels: int) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Max-pooled (point, plane) fields: level h holds the max over cells
+        [i, i + 2^h) × [j, j + 2^h)."""
+        return [(max_pool(self.values, h), max_pool(self.plane_values, h)) for h in range(levels + 1)]
+
+
+def max_pool(values: np.ndarray, level: int) -> np.ndarray:
+    """The max over cells [i, i + 2^level) × [j, j + 2^level) (0 beyond the grid)."""
+    width = 2**level
+    if width == 1:
+        return values
+    # a window [i, i + w) is maximum_filter1d's centred window shifted by (w − 1) // 2
+    g = maximum_filter1d(values, width, axis=0, mode="constant", cval=0.0, origin=-(width // 2))
+    return maximum_filter1d(g, width, axis=1, mode="constant", cval=0.0, origin=-(width // 2))

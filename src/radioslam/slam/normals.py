@@ -53,3 +53,13 @@ def specular_normals(scan: Scan) -> np.ndarray:
     phi[interior] = np.clip(vertex, x[:, 0], x[:, 2])
     normals[order] = wrap_angle(phi[arc] + boresight)
     return normals
+
+
+def wall_points(scan: Scan, normals: np.ndarray) -> np.ndarray:
+    """Terminal-frame points (P, 2) with each arc point moved to where its beam meets the
+    arc's wall: the line through the specular foot (range r, bearing φ) normal to φ, at
+    range r / cos(θ − φ) along the beam θ. Points without a normal stay where they are."""
+    known = ~np.isnan(normals)
+    stretch = np.ones(len(scan))
+    stretch[known] = 1.0 / np.cos(scan.angle_rad[known] - normals[known])
+    return scan.xy * stretch[:, None]

@@ -23,7 +23,7 @@ def refine_pose(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, s
 
     def terms(pose):
         placed = points @ rotation(pose[2]).T + pose[:2]
-        value, grad = grid.interpolate(placed)
+        value, grad = grid.interpolate(placed, known)
         delta = np.where(known, wrap_angle(pose[2] + np.nan_to_num(normals) - grid.normal_at(placed)), 0.0)
         delta = np.nan_to_num(delta)  # no map normal there
         agree = np.exp(-0.5 * (delta / sigma) ** 2)

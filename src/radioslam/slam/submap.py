@@ -30,7 +30,7 @@ def fused_points(keys: list[int], poses: dict[int, np.ndarray], points: dict[int
 
 
 def submap_grid(submap: Submap, poses, points, normals, resolution: float, sigma: float, margin: float,
-                normal_sigma: float) -> LikelihoodGrid:
+                normal_sigma: float, plane_reach: float) -> LikelihoodGrid:
     """The likelihood grid of a submap in its anchor's frame."""
     xy, nrm = fused_points(submap.keys, poses, points, normals, poses[submap.anchor])
-    return LikelihoodGrid.from_points(xy, resolution, sigma, margin, nrm, normal_sigma)
+    return LikelihoodGrid.from_points(xy, resolution, sigma, margin, nrm, normal_sigma, plane_reach)

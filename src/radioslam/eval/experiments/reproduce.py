@@ -44,7 +44,26 @@ def _fig8(out: Path, seed: int, trials: int | None) -> dict:
     return r.to_json()
 
 
-EXPERIMENTS = {"table1": _table1, "fig5": _fig5, "fig8": _fig8}
+def _fig6(out: Path, seed: int, trials: int | None) -> dict:
+    """Fig. 6: the whole pipeline on paper-cnv (one run; ``trials`` does not apply), its run
+    directory kept under fig6-run/ with report.html."""
+    import shutil
+
+    from radioslam.pipeline import evaluate_stage, simulate_and_sense, slam_stage
+    from radioslam.viz.report import write_report
+
+    run = out / "fig6-run"
+    timings = simulate_and_sense("paper-cnv", run, seed, None)
+    slam_stage(run, timings=timings)
+    metrics = evaluate_stage(run)
+    write_report(run)
+    shutil.copyfile(run / "fig6.png", out / "fig6.png")
+    write_table(out / "fig6", ["metric", "value"],
+                [[k, v] for k, v in metrics.items() if isinstance(v, (int, float))])
+    return metrics
+
+
+EXPERIMENTS = {"table1": _table1, "fig5": _fig5, "fig8": _fig8, "fig6": _fig6}
 
 
 def run_experiment(name: str, out: Path, seed: int, trials: int | None) -> dict:
