@@ -18,7 +18,7 @@ class SlamConfig(BaseModel):
     normal_sigma_deg: float = Field(1.0, gt=0)
     # points with a normal are scored point-to-plane within this distance of the nearest map point
     plane_reach_m: float = Field(0.5, ge=0)
-    project_arcs: bool = True  # arc points placed where their beam meets the arc's wall line
+    project_arcs: bool = False  # arc points placed where their beam meets the arc's wall line (tried: worse)
     min_points: int = Field(8, ge=3)  # a scan with fewer points is skipped with a warning
     submap_scans: int = Field(7, ge=1)  # consecutive scans per submap (MATLAB lidarSLAM's default)
     local_map_scans: int = Field(10, ge=1)  # the front end matches against this many latest scans

@@ -1,8 +1,10 @@
 """Loop closure: candidate submaps near the current pose (not the most recent ones), a
-wide-window branch-and-bound match of the current scan (Hess et al. 2016 §V), and two
+wide-window branch-and-bound match of the current scan (Hess et al. 2016 §V), and three
 acceptance tests: the normalized score (mean point likelihood, in [0, 1], independent of
-the number of points) and geometric consistency with the graph (the match must agree with
-the pose the odometry predicts, within their joint covariance: a χ²(3) gate).
+the number of points), geometric consistency with the graph (the match must agree with
+the pose the odometry predicts, within their joint covariance: a χ²(3) gate), and the
+information of the points that agree with the submap, which must fix every direction
+(:mod:`radioslam.slam.degeneracy`): one wall in common lets the match slide along it.
 """
 
 from __future__ import annotations
@@ -14,11 +16,13 @@ import numpy as np
 from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.config import SlamConfig
 from radioslam.slam.correlative import correlative_match
+from radioslam.slam.degeneracy import weak_direction
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.refine import refine_pose
-from radioslam.slam.se2 import wrap_angle
+from radioslam.slam.se2 import transform_points, wrap_angle
 
 BRANCH_LEVELS = 4
+INLIER_LIKELIHOOD = float(np.exp(-0.5 * 2.0**2))  # a point within 2σ of the submap agrees with it
 
 
 @dataclass(frozen=True)
@@ -50,5 +54,11 @@ def match_loop(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, pr
         return None
     pose = refine_pose(grid, points, normals, local.pose, grid.resolution, step)
     if mahalanobis2(pose, predicted, drift_covariance + local.covariance) > cfg.loop_gate_chi2:
+        return None
+    # the points that agree with the submap must fix every direction (Zhang et al. 2016), or the
+    # match could slide along them
+    placed = transform_points(pose, points)
+    agree = grid.interpolate(placed, ~np.isnan(normals))[0] >= INLIER_LIKELIHOOD
+    if weak_direction(points[agree], normals[agree], pose[2], local.covariance, cfg.degenerate_ratio) is not None:
         return None
     return LoopClosure(anchor, key, pose, local.covariance, local.score)
