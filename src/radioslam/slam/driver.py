@@ -67,6 +67,7 @@ class RadioSlam:
         out = SlamResult(np.zeros((n, 3)), odometry, np.zeros(n, bool), np.zeros(n, bool), np.full(n, np.nan))
         kept: list[int] = []
         submaps: list[Submap] = []
+        matchers: dict[int, tuple[int, BranchAndBound]] = {}  # submap anchor → (graph version, matcher)
         velocity, last = None, None
         seconds = []
         for k, scan in enumerate(scans):
@@ -126,7 +127,7 @@ class RadioSlam:
             submaps[-1].keys.append(k)
             # 7. loop closure against older submaps near the current pose (a degenerate scan cannot close one)
             found = [] if out.degenerate[k] else self._close_loops(k, submaps, estimates, points, normals, odo_cov,
-                                                                   kept, margin)
+                                                                   kept, margin, matchers, graph.version)
             for loop in found:
                 loop = self.loop_hook(loop) if self.loop_hook else loop
                 graph.add_loop(loop.anchor, loop.key, loop.relative, loop.covariance)
@@ -156,7 +157,8 @@ class RadioSlam:
         pose = refine_pose(grid, xy, phi, match.pose, cfg.resolution_m, step)
         return pose, match.covariance, match.score
 
-    def _close_loops(self, k, submaps, estimates, points, normals, odo_cov, kept, margin) -> list[LoopClosure]:
+    def _close_loops(self, k, submaps, estimates, points, normals, odo_cov, kept, margin, matchers,
+                     version) -> list[LoopClosure]:
         cfg = self.cfg
         current = estimates[k]
         found = []
@@ -164,12 +166,14 @@ class RadioSlam:
             members = np.array([estimates[m][:2] for m in s.keys])
             if np.min(np.linalg.norm(members - current[:2], axis=1)) > cfg.loop_radius_m:
                 continue
-            grid = submap_grid(s, estimates, points, normals, cfg.resolution_m, cfg.sigma_m, margin,
-                               np.radians(cfg.normal_sigma_deg), cfg.plane_reach_m)
+            if matchers.get(s.anchor, (None,))[0] != version:  # built once per pose graph solution
+                grid = submap_grid(s, estimates, points, normals, cfg.resolution_m, cfg.sigma_m, margin,
+                                   np.radians(cfg.normal_sigma_deg), cfg.plane_reach_m)
+                matchers[s.anchor] = (version, BranchAndBound(grid, BRANCH_LEVELS))
             predicted = between(estimates[s.anchor], current)
             drift = drift_covariance(odo_cov, [m for m in kept if s.anchor < m <= k],
                                      np.linalg.norm(predicted[:2]))
-            loop = match_loop(grid, points[k], normals[k], predicted, drift, cfg, s.anchor, k)
+            loop = match_loop(matchers[s.anchor][1], points[k], normals[k], predicted, drift, cfg, s.anchor, k)
             if loop is not None:
                 found.append(loop)
         return found

@@ -17,7 +17,6 @@ from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.config import SlamConfig
 from radioslam.slam.correlative import correlative_match
 from radioslam.slam.degeneracy import weak_direction
-from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.refine import refine_pose
 from radioslam.slam.se2 import transform_points, wrap_angle
 
@@ -40,11 +39,12 @@ def mahalanobis2(measured: np.ndarray, predicted: np.ndarray, covariance: np.nda
     return float(d @ np.linalg.solve(covariance, d))
 
 
-def match_loop(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, predicted: np.ndarray,
+def match_loop(matcher: BranchAndBound, points: np.ndarray, normals: np.ndarray, predicted: np.ndarray,
                drift_covariance: np.ndarray, cfg: SlamConfig, anchor: int, key: int) -> LoopClosure | None:
-    """A verified loop closure of the scan against a submap grid (anchor frame), or None."""
+    """A verified loop closure of the scan against a submap's matcher (anchor frame), or None."""
     step = np.radians(cfg.angle_step_deg)
-    found = BranchAndBound(grid, BRANCH_LEVELS).match(points, normals, predicted, cfg.loop_window_m,
+    grid = matcher.grid
+    found = matcher.match(points, normals, predicted, cfg.loop_window_m,
                                                        np.radians(cfg.loop_window_deg), step, cfg.loop_min_score)
     if found.pose is None:
         return None

@@ -34,6 +34,7 @@ class PoseGraph:
     initial: gtsam.Values = field(default_factory=gtsam.Values)
     inliers: list[int] = field(default_factory=list)  # factor indices GNC must keep
     loops: list[tuple[int, int]] = field(default_factory=list)
+    version: int = 0  # counts the solutions: estimates derived from an older one are stale
 
     def add_pose(self, key: int, pose: np.ndarray) -> None:
         if not self.initial.exists(key):
@@ -63,5 +64,6 @@ class PoseGraph:
         else:
             result = gtsam.LevenbergMarquardtOptimizer(self.graph, self.initial).optimize()
         self.initial = result
+        self.version += 1
         return {int(k): np.array([result.atPose2(k).x(), result.atPose2(k).y(), result.atPose2(k).theta()])
                 for k in result.keys()}
