@@ -29,7 +29,7 @@ def test_se2_compose_between_inverse(a, b):
 
 def test_pyramid_level_is_the_max_over_its_window(rng):
     grid = LikelihoodGrid(rng.random((37, 29)), np.zeros(2), 0.1, np.full((37, 29), np.nan), np.inf)
-    for h, (level, plane) in enumerate(grid.pyramid(4)):
+    for h, (level, plane) in enumerate(grid.pyramid(4)):  # the point field, then the plane field
         w = 2**h
         brute = np.array([[grid.values[i:i + w, j:j + w].max() for j in range(29)] for i in range(37)])
         assert np.array_equal(level, brute) and np.array_equal(plane, brute)  # no plane field: the same

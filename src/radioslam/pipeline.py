@@ -113,6 +113,7 @@ def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = 
     write_json(run.slam_summary, {
         "loop_closures": [{"anchor": lc.anchor, "pose": lc.key, "score": lc.score} for lc in result.loops],
         "skipped_scans": np.flatnonzero(result.skipped).tolist(),
+        "points_per_scan": [len(s) for s in scans],
         "degenerate_scans": np.flatnonzero(result.degenerate).tolist(),
         "warnings": result.warnings,
         "slam_ms_per_scan_median": float(np.median(result.seconds_per_scan) * 1e3),
@@ -136,7 +137,7 @@ def evaluate_stage(out: Path) -> dict:
     summary = json.loads(run.slam_summary.read_text(encoding="utf-8")) if run.slam_summary.exists() else {}
     _, transform = align(estimate, truth)
     points = transform_points(transform, read_map_points(run.map_cloud))
-    counts = [len(read_scan(run.scan_file(k))) for k in range(len(truth))] if run.scans.is_dir() else []
+    counts = summary.get("points_per_scan", [])
     metrics = {
         "ate_rmse_m": ate_rmse(estimate, truth),
         "ate_rmse_odometry_m": ate_rmse(odometry, truth),

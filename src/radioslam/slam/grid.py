@@ -23,6 +23,7 @@ Both fields are kept (``values``: point-to-point, ``plane``: point-to-plane).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.ndimage import distance_transform_edt, maximum_filter1d
@@ -52,6 +53,11 @@ class LikelihoodGrid:
     @property
     def plane_values(self) -> np.ndarray:
         return self.values if self.plane is None else self.plane
+
+    @cached_property
+    def fields(self) -> np.ndarray:
+        """(2, NX, NY): the point field, then the plane field (one gather picks either)."""
+        return np.stack([self.values, self.plane_values])
 
     @classmethod
     def from_points(cls, points: np.ndarray, resolution: float, sigma: float, margin: float,
@@ -86,16 +92,16 @@ class LikelihoodGrid:
 
     def likelihood_at(self, x: np.ndarray, y: np.ndarray, on_plane: np.ndarray,
                       world_normal: np.ndarray | None = None,
-                      fields: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+                      fields: np.ndarray | None = None) -> np.ndarray:
         """The field at integer cells x, y (0 outside the grid), point-to-plane where
         ``on_plane`` (broadcast against x), times the normal agreement of points with world
-        normals ``world_normal`` (left out when None). ``fields`` replaces the (point,
-        plane) fields (a max-pooled level, for branch and bound)."""
-        point, plane = (self.values, self.plane_values) if fields is None else fields
-        nx, ny = point.shape
+        normals ``world_normal`` (left out when None). ``fields`` (2, NX, NY) replaces the
+        point and plane fields (a max-pooled level, for branch and bound)."""
+        fields = self.fields if fields is None else fields
+        nx, ny = fields.shape[1:]
         inside = (x >= 0) & (x < nx) & (y >= 0) & (y < ny)
         x, y = np.clip(x, 0, nx - 1), np.clip(y, 0, ny - 1)
-        like = np.where(inside, np.where(on_plane, plane[x, y], point[x, y]), 0.0)
+        like = np.where(inside, fields[np.asarray(on_plane, dtype=np.int64), x, y], 0.0)
         if world_normal is not None:
             like = like * normal_likelihood(self.normals[x, y], world_normal, self.normal_sigma)
         return like
@@ -125,10 +131,10 @@ class LikelihoodGrid:
         dy = ((v01 - v00) * (1 - fx) + (v11 - v10) * fx) / self.resolution
         return value, np.stack([dx, dy], axis=1)
 
-    def pyramid(self, levels: int) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Max-pooled (point, plane) fields: level h holds the max over cells
+    def pyramid(self, levels: int) -> list[np.ndarray]:
+        """Max-pooled fields (2, NX, NY) as in ``fields``: level h holds the max over cells
         [i, i + 2^h) × [j, j + 2^h)."""
-        return [(max_pool(self.values, h), max_pool(self.plane_values, h)) for h in range(levels + 1)]
+        return [np.stack([max_pool(self.values, h), max_pool(self.plane_values, h)]) for h in range(levels + 1)]
 
 
 def max_pool(values: np.ndarray, level: int) -> np.ndarray:
