@@ -49,7 +49,7 @@ def match_loop(matcher: BranchAndBound, points: np.ndarray, normals: np.ndarray,
     if found.pose is None:
         return None
     # the response surface around the winner gives the covariance (Olson 2009 §IV)
-    local = correlative_match(grid, points, normals, found.pose, 2 * grid.resolution, 2 * step, step)
+    local = correlative_match(grid, points, normals, found.pose, cfg.window_m, np.radians(cfg.window_deg), step)
     if local.score < cfg.loop_min_score:
         return None
     pose = refine_pose(grid, points, normals, local.pose, grid.resolution, step)

@@ -7,7 +7,8 @@ import numpy as np
 
 def wrap_angle(theta: np.ndarray) -> np.ndarray:
     """Angles wrapped to (−π, π]."""
-    return np.angle(np.exp(1j * np.asarray(theta, dtype=np.float64)))
+    wrapped = np.pi - np.mod(np.pi - np.asarray(theta, dtype=np.float64), 2 * np.pi)
+    return wrapped
 
 
 def rotation(theta: np.ndarray) -> np.ndarray:
