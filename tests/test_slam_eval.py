@@ -67,12 +67,10 @@ def test_occupancy_grid_round_trips_through_map_server_files(tmp_path):
 
 @pytest.fixture(scope="module")
 def demo_run(tmp_path_factory):
-    from radioslam.pipeline import evaluate_stage, simulate_and_sense, slam_stage
+    from radioslam.pipeline import run_scene
 
     out = tmp_path_factory.mktemp("demo")
-    timings = simulate_and_sense("paper-cnv", out, 1, None)
-    slam_stage(out, timings=timings)
-    return out, evaluate_stage(out)
+    return out, run_scene("paper-cnv", out, 1, None)[1]
 
 
 def test_demo_meets_its_targets_on_seed_1(demo_run):

@@ -235,18 +235,16 @@ def evaluate(
 
 
 def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out: bool) -> None:
-    from radioslam.pipeline import evaluate_stage, simulate_and_sense, slam_stage
+    from radioslam.pipeline import run_scene
     from radioslam.scene import load_scene
+    from radioslam.viz.report import write_report
 
     poses = len(load_scene(scene).poses)
     with progress() as bar:
         task = bar.add_task("simulating and sensing", total=poses)
-        timings = simulate_and_sense(scene, out, seed, snr_db, lambda: bar.advance(task))
-    result = slam_stage(out, timings=timings)
+        result, metrics = run_scene(scene, out, seed, snr_db, lambda: bar.advance(task))
     for line in result.warnings:
         err.print(f"radioslam: warning: {line}", markup=False)
-    metrics = evaluate_stage(out)
-    from radioslam.viz.report import write_report
 
     write_report(out)
     _print_metrics(metrics, json_out)

@@ -123,6 +123,14 @@ def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = 
     return result
 
 
+def run_scene(scene_name: str, out: Path, seed: int, snr_db: float | None,
+              advance=None) -> tuple[SlamResult, dict]:
+    """Simulate and sense, SLAM, evaluate: a whole run directory; the SLAM result and metrics."""
+    timings = simulate_and_sense(scene_name, out, seed, snr_db, advance)
+    result = slam_stage(out, timings=timings)
+    return result, evaluate_stage(out)
+
+
 def evaluate_stage(out: Path) -> dict:
     """metrics.json (DESIGN.md §6 ★ keys) against the scene's ground truth."""
     run = RunDir(out)

@@ -49,7 +49,8 @@ def line_normals(points: np.ndarray, radius: float = NEIGHBOUR_RADIUS_M) -> np.n
 
 def information(points: np.ndarray, normals: np.ndarray) -> np.ndarray:
     """J (2, 2) = Σ n nᵀ, specular normals where known, neighbour lines elsewhere."""
-    phi = np.where(np.isnan(normals), line_normals(points), normals)
+    unknown = np.isnan(normals)
+    phi = np.where(unknown, line_normals(points), normals) if unknown.any() else normals
     phi = phi[~np.isnan(phi)]
     u = np.stack([np.cos(phi), np.sin(phi)], axis=1)
     return u.T @ u
@@ -64,12 +65,17 @@ def weak_direction(points: np.ndarray, normals: np.ndarray, heading: float, cova
     standard deviations.
     """
     eig, vec = np.linalg.eigh(information(points, normals))
-    if np.sqrt(eig[-1] / max(eig[0], 1e-18)) > max_ratio:
-        return rotation(heading) @ vec[:, 0]
+    if _elongation(eig) > max_ratio:
+        return rotation(heading) @ vec[:, 0]  # least information
     eig, vec = np.linalg.eigh(covariance[:2, :2])
-    if np.sqrt(eig[-1] / max(eig[0], 1e-18)) > max_ratio:
-        return vec[:, -1]
+    if _elongation(eig) > max_ratio:
+        return vec[:, -1]  # most variance
     return None
+
+
+def _elongation(eigenvalues: np.ndarray) -> float:
+    """√(λ_max/λ_min) of ascending eigenvalues: the ratio of the axes' lengths."""
+    return float(np.sqrt(eigenvalues[-1] / max(eigenvalues[0], 1e-18)))
 
 
 def remap(pose: np.ndarray, covariance: np.ndarray, prediction: np.ndarray, weak: np.ndarray,

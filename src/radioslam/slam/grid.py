@@ -122,8 +122,10 @@ class LikelihoodGrid:
         x0, y0 = np.clip(i0[:, 0], 0, hi[0]), np.clip(i0[:, 1], 0, hi[1])
         x1, y1 = np.clip(i0[:, 0] + 1, 0, hi[0]), np.clip(i0[:, 1] + 1, 0, hi[1])
 
+        field = np.asarray(on_plane, dtype=np.int64)
+
         def corner(x, y):
-            return np.where(on_plane, self.plane_values[x, y], self.values[x, y])
+            return self.fields[field, x, y]
 
         v00, v10, v01, v11 = corner(x0, y0), corner(x1, y0), corner(x0, y1), corner(x1, y1)
         fx, fy = f[:, 0], f[:, 1]

@@ -45,7 +45,7 @@ def match_loop(matcher: BranchAndBound, points: np.ndarray, normals: np.ndarray,
     step = np.radians(cfg.angle_step_deg)
     grid = matcher.grid
     found = matcher.match(points, normals, predicted, cfg.loop_window_m,
-                                                       np.radians(cfg.loop_window_deg), step, cfg.loop_min_score)
+                          np.radians(cfg.loop_window_deg), step, cfg.loop_min_score)
     if found.pose is None:
         return None
     # the response surface around the winner gives the covariance (Olson 2009 §IV)

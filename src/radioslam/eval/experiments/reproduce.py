@@ -49,13 +49,11 @@ def _fig6(out: Path, seed: int, trials: int | None) -> dict:
     directory kept under fig6-run/ with report.html."""
     import shutil
 
-    from radioslam.pipeline import evaluate_stage, simulate_and_sense, slam_stage
+    from radioslam.pipeline import run_scene
     from radioslam.viz.report import write_report
 
     run = out / "fig6-run"
-    timings = simulate_and_sense("paper-cnv", run, seed, None)
-    slam_stage(run, timings=timings)
-    metrics = evaluate_stage(run)
+    _, metrics = run_scene("paper-cnv", run, seed, None)
     write_report(run)
     shutil.copyfile(run / "fig6.png", out / "fig6.png")
     write_table(out / "fig6", ["metric", "value"],
