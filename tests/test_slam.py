@@ -188,3 +188,49 @@ def test_featureless_corridor_is_flagged_degenerate():
                                                    "along -180° (predicted instead)")) for w in flagged)
     # what the walls do fix stays right: the lateral position and the heading
     assert np.abs(result.poses[:, 1]).max() < 0.05 and np.abs(result.poses[:, 2]).max() < np.radians(0.5)
+
+
+def test_a_wall_the_map_lacks_fixes_nothing():
+    """Only the points that agree with the map count towards the match's information: a
+    wall seen for the first time cannot stop the match sliding along the one in common."""
+    from radioslam.slam.degeneracy import matched_weak_direction
+
+    along = np.column_stack([np.linspace(-3, 3, 61), np.full(61, 2.0)])  # a wall y = 2, normal −90°
+    across = np.column_stack([np.full(41, 4.0), np.linspace(-2, 2, 41)])  # a wall x = 4, normal 180°
+    scan = np.vstack([along, across])
+    normals = np.concatenate([np.full(61, -np.pi / 2), np.full(41, np.pi)])
+    tight = np.diag([1e-4, 1e-4, 1e-6])
+    pose = np.zeros(3)
+    one_wall = LikelihoodGrid.from_points(along, 0.05, 0.05, 1.0, np.full(61, -np.pi / 2), np.radians(1.0), 0.5)
+    weak = matched_weak_direction(one_wall, pose, scan, normals, tight, 4.0)
+    assert weak is not None and abs(weak[0]) == pytest.approx(1.0)
+    both = LikelihoodGrid.from_points(scan, 0.05, 0.05, 1.0, normals, np.radians(1.0), 0.5)
+    assert matched_weak_direction(both, pose, scan, normals, tight, 4.0) is None
+
+
+def test_pace_is_the_median_observed_step_along_the_predicted_travel():
+    from radioslam.slam.driver import pace_prediction
+
+    last, prediction = np.array([1.0, 1.0, 0.0]), np.array([1.0, 1.4, 0.05])
+    paced = pace_prediction(prediction, last, [0.5, 0.6, 0.5, 9.0], 3)
+    assert paced == pytest.approx([1.0, 1.6, 0.05])  # median of the last three lengths, heading kept
+    assert pace_prediction(prediction, last, [], 3) is prediction  # nothing observed yet
+    assert pace_prediction(last.copy(), last, [0.5], 3) == pytest.approx(last)  # standing still stays still
+
+
+def test_match_the_map_does_not_support_keeps_the_prediction(rng):
+    """A scan whose points the local map cannot explain (a wholly new view) must not move
+    the pose: the match is flagged and the constant-velocity prediction kept."""
+    pts, nrm = room_points(rng, 600)
+    poses = np.array([[-1.0 + 0.2 * k, 0.5, 0.0] for k in range(8)])
+    scans = synthetic_scans(poses, pts, nrm, rng)
+    elsewhere = rng.uniform(-5, 5, (60, 2)) + [40.0, 0.0]  # points of no wall in the map
+    scans[4] = Scan(np.linalg.norm(elsewhere, axis=1), np.arctan2(elsewhere[:, 1], elsewhere[:, 0]),
+                    np.zeros(60), np.zeros(60, np.int64), np.zeros(60, np.int64))
+    result = RadioSlam(SlamConfig()).run(scans)
+    assert result.untrusted.tolist() == [k == 4 for k in range(8)]
+    assert result.match_score[4] < SlamConfig().min_match_score
+    assert any(w.startswith("scan 4: match score") and w.endswith("pose predicted instead") for w in result.warnings)
+    rel = between(result.poses[0], result.poses)
+    assert np.abs(rel[:, :2] - between(poses[0], poses)[:, :2]).max() < 0.05
+    assert not RadioSlam(SlamConfig(min_match_score=0.0)).run(scans).untrusted.any()

@@ -26,6 +26,8 @@ class SlamConfig(BaseModel):
     window_m: float = Field(0.30, gt=0)
     window_deg: float = Field(6.0, gt=0)
     angle_step_deg: float = Field(0.5, gt=0)
+    # a front-end match whose normalized score is below this is not trusted: the pose is predicted
+    min_match_score: float = Field(0.25, ge=0, le=1)
     # loop closure: branch and bound over a wide window
     loop_radius_m: float = Field(3.0, gt=0)  # candidate submaps within this distance
     loop_skip_submaps: int = Field(2, ge=0)  # never the most recent ones
@@ -38,3 +40,6 @@ class SlamConfig(BaseModel):
     # a match is degenerate when its surfaces' information (Σ n nᵀ) or its covariance is this
     # elongated (ratio of standard deviations): a direction nothing fixes
     degenerate_ratio: float = Field(4.0, gt=1)
+    # along such a direction the position follows the mean motion over this many scans (the
+    # walker's pace), not the last step: one step's speed is a poor guess for many steps ahead
+    pace_scans: int = Field(10, ge=1)

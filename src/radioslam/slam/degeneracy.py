@@ -25,10 +25,12 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from radioslam.slam.se2 import rotation
+from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.se2 import rotation, transform_points
 
 NEIGHBOUR_RADIUS_M = 0.5
 NEIGHBOURS = 6  # the point itself and up to five others
+INLIER_LIKELIHOOD = float(np.exp(-0.5 * 2.0**2))  # a point within 2σ of the map agrees with it
 
 
 def line_normals(points: np.ndarray, radius: float = NEIGHBOUR_RADIUS_M) -> np.ndarray:
@@ -71,6 +73,14 @@ def weak_direction(points: np.ndarray, normals: np.ndarray, heading: float, cova
     if _elongation(eig) > max_ratio:
         return vec[:, -1]  # most variance
     return None
+
+
+def matched_weak_direction(grid: LikelihoodGrid, pose: np.ndarray, points: np.ndarray, normals: np.ndarray,
+                           covariance: np.ndarray, max_ratio: float) -> np.ndarray | None:
+    """:func:`weak_direction` of only the points that agree with ``grid`` at ``pose``: a wall the
+    map has not seen yet constrains nothing, so a match on one wall in common slides along it."""
+    agree = grid.interpolate(transform_points(pose, points), ~np.isnan(normals))[0] >= INLIER_LIKELIHOOD
+    return weak_direction(points[agree], normals[agree], pose[2], covariance, max_ratio)
 
 
 def _elongation(eigenvalues: np.ndarray) -> float:

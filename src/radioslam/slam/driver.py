@@ -16,7 +16,7 @@ from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.config import SlamConfig
 from radioslam.slam.correlative import correlative_match
-from radioslam.slam.degeneracy import remap, weak_direction
+from radioslam.slam.degeneracy import matched_weak_direction, remap
 from radioslam.slam.errors import SlamError
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.loop_closure import BRANCH_LEVELS, LoopClosure, match_loop
@@ -28,6 +28,7 @@ from radioslam.slam.submap import Submap, fused_points, submap_grid
 
 # a skipped scan is tied to its neighbours by the constant-velocity model only, this loosely
 SKIPPED_SIGMA = np.array([0.5, 0.5, np.radians(10.0)])
+STRAIGHT_RAD = np.radians(2.0)  # a step turning less than this walks straight: the pace applies
 FIRST_WINDOW_M, FIRST_WINDOW_DEG = 1.0, 20.0  # no velocity yet before the second scan
 
 
@@ -38,6 +39,7 @@ class SlamResult:
     skipped: np.ndarray  # (P,) scans with too few points
     degenerate: np.ndarray  # (P,) matches that leave a direction unobserved (e.g. a featureless corridor)
     match_score: np.ndarray  # (P,) normalized front-end score, NaN where not matched
+    untrusted: np.ndarray  # (P,) matches scored below min_match_score: the pose was predicted
     loops: list[LoopClosure] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
     seconds_per_scan: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -64,11 +66,13 @@ class RadioSlam:
         normals: dict[int, np.ndarray] = {}
         odometry = np.zeros((n, 3))
         odo_cov: dict[int, np.ndarray] = {}
-        out = SlamResult(np.zeros((n, 3)), odometry, np.zeros(n, bool), np.zeros(n, bool), np.full(n, np.nan))
+        out = SlamResult(np.zeros((n, 3)), odometry, np.zeros(n, bool), np.zeros(n, bool), np.full(n, np.nan),
+                         np.zeros(n, bool))
         kept: list[int] = []
         submaps: list[Submap] = []
         matchers: dict[int, tuple[int, BranchAndBound]] = {}  # submap anchor → (graph version, matcher)
         velocity, last = None, None
+        speeds: list[float] = []  # step lengths of the matches that observed every direction
         seconds = []
         for k, scan in enumerate(scans):
             tick = time.perf_counter()
@@ -104,11 +108,20 @@ class RadioSlam:
                                                   cfg.plane_reach_m)
                 pose, cov, score = self._front_end(grid, xy, phi, prediction, first=velocity is None)
                 out.match_score[k] = score
+                if score < cfg.min_match_score:
+                    # 3b. a match the map barely supports (a new view, most points unmapped) is not trusted
+                    out.untrusted[k] = True
+                    pose, cov = prediction, np.diag(SKIPPED_SIGMA**2)
+                    out.warnings.append(f"scan {k}: match score {score:.2f} < {cfg.min_match_score:.2f}, "
+                                        "pose predicted instead")
                 # 4. a direction the walls cannot fix keeps the prediction there (Zhang et al. 2016)
-                weak = weak_direction(xy, phi, pose[2], cov, cfg.degenerate_ratio)
+                weak = None if out.untrusted[k] else matched_weak_direction(grid, pose, xy, phi, cov,
+                                                                             cfg.degenerate_ratio)
                 if weak is not None:
                     out.degenerate[k] = True
-                    pose, cov = remap(pose, cov, prediction, weak, SKIPPED_SIGMA[0])
+                    paced = pace_prediction(prediction, estimates[last], speeds if abs(step[2]) < STRAIGHT_RAD else [],
+                                            cfg.pace_scans)
+                    pose, cov = remap(pose, cov, paced, weak, SKIPPED_SIGMA[0])
                     out.warnings.append(f"scan {k}: degenerate match, nothing fixes the position along "
                                         f"{np.degrees(np.arctan2(weak[1], weak[0])):.0f}° (predicted instead)")
                 # 5. odometry factor from the previous pose
@@ -118,6 +131,8 @@ class RadioSlam:
                 graph.add_odometry(last, k, rel, odo_cov[k])
                 odometry[k] = compose(odometry[last], rel)
                 velocity = rel if not out.skipped[last] else None
+                if not (out.degenerate[k] or out.untrusted[k]) and abs(rel[2]) < STRAIGHT_RAD:
+                    speeds.append(float(np.linalg.norm(rel[:2])))
                 estimates[k] = pose
             points[k], normals[k] = xy, phi
             kept.append(k)
@@ -177,6 +192,18 @@ class RadioSlam:
             if loop is not None:
                 found.append(loop)
         return found
+
+
+def pace_prediction(prediction: np.ndarray, last: np.ndarray, speeds: list[float], scans: int) -> np.ndarray:
+    """``prediction`` moved along its own direction of travel from ``last`` so that the step is
+    the median of the last ``scans`` observed step lengths ``speeds``: the walker's pace."""
+    travel = prediction[:2] - last[:2]
+    length = float(np.linalg.norm(travel))
+    if not speeds or length < 1e-9:
+        return prediction
+    paced = prediction.copy()
+    paced[:2] = last[:2] + travel * (float(np.median(speeds[-scans:])) / length)
+    return paced
 
 
 def drift_covariance(odo_cov: dict[int, np.ndarray], keys: list[int], distance: float) -> np.ndarray:

@@ -16,12 +16,11 @@ import numpy as np
 from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.config import SlamConfig
 from radioslam.slam.correlative import correlative_match
-from radioslam.slam.degeneracy import weak_direction
+from radioslam.slam.degeneracy import matched_weak_direction
 from radioslam.slam.refine import refine_pose
-from radioslam.slam.se2 import transform_points, wrap_angle
+from radioslam.slam.se2 import wrap_angle
 
 BRANCH_LEVELS = 4
-INLIER_LIKELIHOOD = float(np.exp(-0.5 * 2.0**2))  # a point within 2σ of the submap agrees with it
 
 
 @dataclass(frozen=True)
@@ -57,8 +56,6 @@ def match_loop(matcher: BranchAndBound, points: np.ndarray, normals: np.ndarray,
         return None
     # the points that agree with the submap must fix every direction (Zhang et al. 2016), or the
     # match could slide along them
-    placed = transform_points(pose, points)
-    agree = grid.interpolate(placed, ~np.isnan(normals))[0] >= INLIER_LIKELIHOOD
-    if weak_direction(points[agree], normals[agree], pose[2], local.covariance, cfg.degenerate_ratio) is not None:
+    if matched_weak_direction(grid, pose, points, normals, local.covariance, cfg.degenerate_ratio) is not None:
         return None
     return LoopClosure(anchor, key, pose, local.covariance, local.score)
