@@ -115,6 +115,7 @@ def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = 
         "skipped_scans": np.flatnonzero(result.skipped).tolist(),
         "points_per_scan": [len(s) for s in scans],
         "degenerate_scans": np.flatnonzero(result.degenerate).tolist(),
+        "untrusted_scans": np.flatnonzero(result.untrusted).tolist(),
         "warnings": result.warnings,
         "slam_ms_per_scan_median": float(np.median(result.seconds_per_scan) * 1e3),
         "timings_s": {**(timings or {}), "slam": slam_s},
@@ -157,6 +158,7 @@ def evaluate_stage(out: Path) -> dict:
         "points_per_scan": float(np.mean(counts)) if counts else 0.0,
         "skipped_scans": len(summary.get("skipped_scans", [])),
         "degenerate_scans": len(summary.get("degenerate_scans", [])),
+        "untrusted_scans": len(summary.get("untrusted_scans", [])),
         "slam_ms_per_scan": summary.get("slam_ms_per_scan_median"),
         "timings_s": {**summary.get("timings_s", {}), "evaluate": time.perf_counter() - tick},
     }

@@ -107,6 +107,7 @@ class RadioSlam:
                 grid = LikelihoodGrid.from_points(map_xy, res, sigma, margin + FIRST_WINDOW_M, map_n, nsig,
                                                   cfg.plane_reach_m)
                 pose, cov, score = self._front_end(grid, xy, phi, prediction, first=velocity is None)
+                cov = cov + np.diag([cfg.odometry_sigma_m**2] * 2 + [np.radians(cfg.odometry_sigma_deg) ** 2])
                 out.match_score[k] = score
                 if score < cfg.min_match_score:
                     # 3b. a match the map barely supports (a new view, most points unmapped) is not trusted
