@@ -45,6 +45,7 @@ class SlamConfig(BaseModel):
     # a match is degenerate when its surfaces' information (Σ n nᵀ) or its covariance is this
     # elongated (ratio of standard deviations): a direction nothing fixes
     degenerate_ratio: float = Field(4.0, gt=1)
-    # along such a direction the position follows the mean motion over this many scans (the
-    # walker's pace), not the last step: one step's speed is a poor guess for many steps ahead
+    # along such a direction the step is the median length of this many latest straight steps that
+    # observed every direction (the walker's pace), not the last step: one step's speed is a poor
+    # guess for many steps ahead
     pace_scans: int = Field(10, ge=1)

@@ -66,13 +66,15 @@ class RadioSlam:
         normals: dict[int, np.ndarray] = {}
         odometry = np.zeros((n, 3))
         odo_cov: dict[int, np.ndarray] = {}
-        out = SlamResult(np.zeros((n, 3)), odometry, np.zeros(n, bool), np.zeros(n, bool), np.full(n, np.nan),
-                         np.zeros(n, bool))
+        out = SlamResult(poses=np.zeros((n, 3)), odometry=odometry, skipped=np.zeros(n, bool),
+                         degenerate=np.zeros(n, bool), match_score=np.full(n, np.nan), untrusted=np.zeros(n, bool))
+        # the response surface is over-confident: the measured step errors are added to it
+        step_floor = np.diag([cfg.odometry_sigma_m**2] * 2 + [np.radians(cfg.odometry_sigma_deg) ** 2])
         kept: list[int] = []
         submaps: list[Submap] = []
         matchers: dict[int, tuple[int, BranchAndBound]] = {}  # submap anchor → (graph version, matcher)
         velocity, last = None, None
-        speeds: list[float] = []  # step lengths of the matches that observed every direction
+        speeds: list[float] = []  # lengths of the straight steps whose matches observed every direction
         seconds = []
         for k, scan in enumerate(scans):
             tick = time.perf_counter()
@@ -107,7 +109,7 @@ class RadioSlam:
                 grid = LikelihoodGrid.from_points(map_xy, res, sigma, margin + FIRST_WINDOW_M, map_n, nsig,
                                                   cfg.plane_reach_m)
                 pose, cov, score = self._front_end(grid, xy, phi, prediction, first=velocity is None)
-                cov = cov + np.diag([cfg.odometry_sigma_m**2] * 2 + [np.radians(cfg.odometry_sigma_deg) ** 2])
+                cov = cov + step_floor
                 out.match_score[k] = score
                 if score < cfg.min_match_score:
                     # 3b. a match the map barely supports (a new view, most points unmapped) is not trusted
