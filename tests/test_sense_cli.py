@@ -35,6 +35,18 @@ def test_simulate_writes_a_calibration_and_sense_writes_scans(run_dir):
     assert (run_dir / "scans" / "0000.png").stat().st_size > 1000  # Fig. 4(b)/(c)
 
 
+def test_sense_point_filter_paper_rule_keeps_a_subset_and_a_bad_value_exits_2(run_dir):
+    clouds = {}
+    for rule in ("scan-peak", "same-range"):
+        out = run("sense", str(run_dir), "--point-filter", rule, "--plot-pose", "-1")
+        assert out.returncode == 0, out.stderr
+        scan = read_scan(run_dir / "scans" / "0000.ply")
+        clouds[rule] = set(zip(scan.beam.tolist(), scan.orientation.tolist(), np.round(scan.range_m, 6).tolist()))
+    assert clouds["scan-peak"] and clouds["scan-peak"] <= clouds["same-range"]
+    out = run("sense", str(run_dir), "--point-filter", "peak")
+    assert out.returncode == 2 and "--point-filter" in out.stderr and len(out.stderr.strip().splitlines()) == 1
+
+
 def test_sensing_a_recording_read_back_gives_the_same_scan(run_dir):
     """A test at a bound: the SigMF file path and the in-memory path give identical scans."""
     from radioslam.scene import load_scene

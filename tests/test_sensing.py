@@ -8,7 +8,7 @@ from radioslam.capture import CaptureMode
 from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
 from radioslam.eval.point_targets import capture_point_targets, nearest_beam, point_paths
 from radioslam.scene import load_scene
-from radioslam.sensing import Detector, Receiver, SensingConfig, estimate_hardware_delay
+from radioslam.sensing import Detector, PointFilter, Receiver, SensingConfig, estimate_hardware_delay
 from radioslam.sensing.bisection import bisect_peaks, iterations_for, neighbour_values
 from radioslam.sensing.cfar import cfar_threshold
 from radioslam.sensing.config import CfarKind
@@ -19,6 +19,13 @@ from radioslam.sim.calibration_targets import calibration_ranges, simulate_calib
 
 RADIO = RadioConfig()
 FS = RADIO.sample_rate_hz
+
+
+def distance_to_segments(points, seg):
+    """Distance (P,) of each point to the nearest wall segment (S, 2, 2)."""
+    a, d = seg[:, 0], seg[:, 1] - seg[:, 0]
+    t = np.clip(np.einsum("psk,sk->ps", points[:, None] - a, d) / np.einsum("sk,sk->s", d, d), 0, 1)
+    return np.min(np.linalg.norm(points[:, None] - (a + t[..., None] * d), axis=2), axis=1)
 
 
 def plate_capture(r, seed=0, mode=CaptureMode.WAVEFORM, **radio):
@@ -112,16 +119,16 @@ def test_multi_target_mode_finds_the_glass_door_and_the_wall_behind_it():
     ahead = np.abs(scan.angle_rad) < np.radians(20)
     door, wall = ahead & (xy[:, 0] < 8), ahead & (xy[:, 0] > 12)
     assert door.sum() >= 5 and wall.sum() >= 5
-    seg = scene.segments
-
-    def distance_to_walls(points):
-        a, d = seg[:, 0], seg[:, 1] - seg[:, 0]
-        t = np.clip(np.einsum("psk,sk->ps", points[:, None] - a, d) / np.einsum("sk,sk->s", d, d), 0, 1)
-        return np.min(np.linalg.norm(points[:, None] - (a + t[..., None] * d), axis=2), axis=1)
-
+    distance_to_walls = lambda points: distance_to_segments(points, scene.segments)  # noqa: E731
     assert distance_to_walls(xy[door | wall]).max() < 0.3
-    single = Receiver(scene.radio, scene.radio.hardware_delay_s).sense(cap).scan
+    # one target per beam: with the paper's rule the wall behind the door is lost; with the same-range
+    # rule a beam or two may see it, and then on the wall
+    paper = SensingConfig(point_filter=PointFilter.SCAN_PEAK)
+    single = Receiver(scene.radio, scene.radio.hardware_delay_s, paper).sense(cap).scan
     assert not ((np.abs(single.angle_rad) < np.radians(20)) & (single.xy[:, 0] > 12)).any()
+    single = Receiver(scene.radio, scene.radio.hardware_delay_s).sense(cap).scan
+    behind = (np.abs(single.angle_rad) < np.radians(20)) & (single.xy[:, 0] > 12)
+    assert behind.sum() < wall.sum() and (distance_to_walls(single.xy[behind]) < 0.3).all()
 
 
 def test_fig8_matched_filter_resolves_the_weak_target_the_pdp_misses():
@@ -157,3 +164,42 @@ def test_refining_only_contender_peaks_gives_the_same_scan(monkeypatch):
     assert np.array_equal(pruned.valid, full.valid)
     assert np.allclose(pruned.range_m[pruned.valid], full.range_m[full.valid], rtol=0, atol=1e-9)
     assert pruned.dft_evaluations < full.dft_evaluations
+
+
+def test_same_range_rule_drops_sidelobes_at_an_echos_range_and_keeps_far_weak_walls():
+    from radioslam.sensing.pointcloud import build_scan
+
+    # beams: a near wall (0 dB), a beam sidelobe of it at its range (−15 dB), the same range at −12 dB,
+    # a far wall at −18 dB, a far echo below the −25 dB floor, and an empty beam
+    rng = np.array([[2.0], [2.3], [1.5], [9.0], [12.0], [np.nan]])
+    rel = np.array([0.0, -15.0, -12.0, -18.0, -28.0, 0.0])
+    valid = np.isfinite(rng)
+    power = np.where(valid[:, 0], 10 ** (rel / 10), 0.0)[:, None] * 4.0
+    args = (rng, power, valid, np.arange(6) * 0.1, np.arange(6), np.zeros(6), -13.0)
+    same = build_scan(*args, floor_db=-25.0, cell_m=SPEED_OF_LIGHT / (2 * FS))
+    assert sorted(same.range_m) == [1.5, 2.0, 9.0]
+    assert same.power_db == pytest.approx([0.0, -12.0, -18.0])
+    assert sorted(build_scan(*args).range_m) == [1.5, 2.0]  # the paper's rule: within 13 dB of the scan's peak
+
+
+def test_a_corridors_far_end_wall_becomes_points_and_its_sidelobes_do_not():
+    from radioslam.scene.loader import scene_from_mapping
+
+    wall = lambda pts: {"points": pts, "material": "concrete"}  # noqa: E731
+    scene = scene_from_mapping({"version": 1, "name": "corridor", "walls": [
+        wall([[-20.0, -2.0], [9.0, -2.0], [9.0, 2.0], [-20.0, 2.0]])],
+        "trajectory": {"poses": [[0.0, 0.0, 0.0]]}}, "test:corridor")
+    cap = Simulator.from_scene(scene).simulate_pose(0, np.random.default_rng(3))
+    delay = scene.radio.hardware_delay_s
+    same = Receiver(scene.radio, delay).sense(cap).scan
+    paper = Receiver(scene.radio, delay, SensingConfig(point_filter=PointFilter.SCAN_PEAK)).sense(cap).scan
+    end = lambda s: (np.abs(s.angle_rad) < np.radians(10)) & (np.abs(s.range_m - 9.0) < 0.1)  # noqa: E731
+    assert end(same).sum() >= 2 and not end(paper).any()  # 20·log10(9/2) = 13.1 dB below the side walls
+    assert -25.0 <= same.power_db[end(same)].max() < -13.0
+    # the side walls' arcs are the paper's: their beam sidelobes (a global −25 dB threshold takes
+    # 40–130° of arc) stay out, and every point lies on a wall
+    side = lambda s: np.sort(s.angle_rad[s.range_m < 2.5])  # noqa: E731
+    assert np.array_equal(side(same), side(paper)) and len(side(paper)) >= 10
+    wide = SensingConfig(point_filter=PointFilter.SCAN_PEAK, point_threshold_db=-25.0)
+    assert len(side(Receiver(scene.radio, delay, wide).sense(cap).scan)) > 2 * len(side(paper))
+    assert distance_to_segments(same.xy, scene.segments).max() < 0.3

@@ -165,14 +165,17 @@ def sense(
     calibration: Optional[Path] = typer.Option(None, "--calibration", help="default: DIR/calibration.json"),
     detector: str = typer.Option("single", "--detector", help="single (the paper's) or multi (CFAR + cancellation)"),
     threshold_db: Optional[float] = typer.Option(None, "--threshold-db", max=0.0,
-                                                 help="point threshold re. scan peak (default −13 single, −25 multi)"),
+                                                 help="point threshold (default −13 single, −25 multi)"),
+    point_filter: str = typer.Option("same-range", "--point-filter",
+                                     help="single detector: same-range (threshold re. the strongest detection at "
+                                          "each range, floor −25 dB) or scan-peak (the paper's: re. the scan's peak)"),
     plot_pose: int = typer.Option(0, "--plot-pose", help="pose whose heatmap and cloud to draw; −1: none"),
 ) -> None:
     """Turn SigMF captures into point clouds: DIR/scans/NNNN.ply."""
     from radioslam.errors import RadioslamError
     from radioslam.io import read_calibration, read_capture, write_scan
     from radioslam.io.rundir import RunDir
-    from radioslam.sensing import Detector, Receiver, SensingConfig
+    from radioslam.sensing import Detector, PointFilter, Receiver, SensingConfig
 
     run = RunDir(run_dir)
     cal = read_calibration(calibration or run.calibration)
@@ -180,6 +183,11 @@ def sense(
         cfg = SensingConfig(detector=Detector(detector), point_threshold_db=threshold_db)
     except ValueError:
         raise RadioslamError("must be 'single' or 'multi'", file="(command line)", field="--detector") from None
+    try:
+        cfg = cfg.model_copy(update={"point_filter": PointFilter(point_filter)})
+    except ValueError:
+        raise RadioslamError("must be 'same-range' or 'scan-peak'", file="(command line)",
+                             field="--point-filter") from None
     files = _capture_files(run.captures)
     receiver = None
     with progress() as bar:

@@ -26,6 +26,15 @@ class Taper(str, Enum):
     HANN = "hann"
 
 
+class PointFilter(str, Enum):
+    """Which single-target detections become points (§IV-A: the −13 dB rule against sidelobe returns)."""
+
+    SCAN_PEAK = "scan-peak"  # the paper's: within the threshold of the scan's strongest detection
+    # within the threshold of the strongest detection at the same range (±1 range cell), where a beam
+    # sidelobe of that echo would appear, and within point_floor_db of the scan's peak
+    SAME_RANGE = "same-range"
+
+
 class SensingConfig(BaseModel):
     """Every receiver parameter. Defaults follow the paper; ranges in metres."""
 
@@ -43,6 +52,11 @@ class SensingConfig(BaseModel):
     # and for multi this one: cancellation removes range sidelobes and CFAR bounds false alarms, so the
     # threshold only has to reject beam sidelobes (two-way −25.6 dB) while keeping targets behind glass
     multi_threshold_db: float = Field(-25.0, le=0)
+    # single detector: the paper's threshold applied per range, not per scan. A beam sidelobe of an
+    # echo has that echo's range, so only there can a weak detection be one; a far wall 15 dB below
+    # the near walls (a corridor's end) is kept. The floor is the two-way beam sidelobe level.
+    point_filter: PointFilter = PointFilter.SAME_RANGE
+    point_floor_db: float = Field(-25.0, le=0)
     cfar: CfarKind = CfarKind.CA
     cfar_guard: int = Field(3, ge=0)
     cfar_train: int = Field(16, ge=2)

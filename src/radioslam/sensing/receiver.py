@@ -16,7 +16,7 @@ from radioslam.capture import Capture, CaptureMode
 from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
 from radioslam.nr.numerology import Numerology
 from radioslam.sensing.bisection import iterations_for
-from radioslam.sensing.config import Detector, SensingConfig
+from radioslam.sensing.config import Detector, PointFilter, SensingConfig
 from radioslam.sensing.detect import Detections, LagGate, detect_multi, detect_single
 from radioslam.sensing.errors import SensingError
 from radioslam.sensing.estimate import ChannelEstimate, estimate_channel
@@ -108,6 +108,11 @@ class Receiver:
             return self.cfg.point_threshold_db
         return self.cfg.multi_threshold_db if self.cfg.detector is Detector.MULTI else self.radio.point_threshold_db
 
+    def point_floor_db(self) -> float | None:
+        """The same-range rule's floor, or None for the paper's scan-peak rule (always for multi)."""
+        same_range = self.cfg.detector is Detector.SINGLE and self.cfg.point_filter is PointFilter.SAME_RANGE
+        return self.cfg.point_floor_db if same_range else None
+
     def to_range(self, delay_s: np.ndarray) -> np.ndarray:
         """Range from T1 + T2 after the calibrated hardware delay (bistatic, eq. (11)'s T_O inverted)."""
         half_path = 0.5 * SPEED_OF_LIGHT * (delay_s - self.hardware_delay_s)
@@ -127,7 +132,7 @@ class Receiver:
         power = np.abs(det.amplitude) ** 2
         # 5. point cloud: normalize by the scan's peak, keep what clears the threshold
         scan = build_scan(rng, power, valid, capture.beam_angle_rad, capture.beam_index, capture.orientation,
-                          self.point_threshold_db())
+                          self.point_threshold_db(), self.point_floor_db(), self.cell_m)
         return SensingResult(scan, t1 / self.fs, delay, rng, power, valid, det.dft_evaluations, spec,
                              est.window_offset, self)
 
