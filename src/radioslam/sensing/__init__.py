@@ -6,5 +6,5 @@ from radioslam.sensing.errors import SensingError
 from radioslam.sensing.pointcloud import Scan
 from radioslam.sensing.receiver import Receiver, SensingResult
 
-__all__ = ["Calibration", "CalibrationTarget", "CfarKind", "Detector", "PointFilter", "Receiver", "Scan", "SensingConfig",
-           "SensingError", "SensingResult", "Taper", "estimate_hardware_delay"]
+__all__ = ["Calibration", "CalibrationTarget", "CfarKind", "Detector", "PointFilter", "Receiver", "Scan",
+           "SensingConfig", "SensingError", "SensingResult", "Taper", "estimate_hardware_delay"]
