@@ -8,6 +8,7 @@ from radioslam.capture import CaptureMode
 from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
 from radioslam.eval.point_targets import capture_point_targets, nearest_beam, point_paths
 from radioslam.scene import load_scene
+from radioslam.scene.geometry import point_segment_distance
 from radioslam.sensing import Detector, PointFilter, Receiver, SensingConfig, estimate_hardware_delay
 from radioslam.sensing.bisection import bisect_peaks, iterations_for, neighbour_values
 from radioslam.sensing.cfar import cfar_threshold
@@ -23,9 +24,7 @@ FS = RADIO.sample_rate_hz
 
 def distance_to_segments(points, seg):
     """Distance (P,) of each point to the nearest wall segment (S, 2, 2)."""
-    a, d = seg[:, 0], seg[:, 1] - seg[:, 0]
-    t = np.clip(np.einsum("psk,sk->ps", points[:, None] - a, d) / np.einsum("sk,sk->s", d, d), 0, 1)
-    return np.min(np.linalg.norm(points[:, None] - (a + t[..., None] * d), axis=2), axis=1)
+    return point_segment_distance(points, seg).min(axis=1)
 
 
 def plate_capture(r, seed=0, mode=CaptureMode.WAVEFORM, **radio):

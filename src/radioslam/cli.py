@@ -180,14 +180,15 @@ def sense(
     run = RunDir(run_dir)
     cal = read_calibration(calibration or run.calibration)
     try:
-        cfg = SensingConfig(detector=Detector(detector), point_threshold_db=threshold_db)
+        kind = Detector(detector)
     except ValueError:
         raise RadioslamError("must be 'single' or 'multi'", file="(command line)", field="--detector") from None
     try:
-        cfg = cfg.model_copy(update={"point_filter": PointFilter(point_filter)})
+        rule = PointFilter(point_filter)
     except ValueError:
         raise RadioslamError("must be 'same-range' or 'scan-peak'", file="(command line)",
                              field="--point-filter") from None
+    cfg = SensingConfig(detector=kind, point_threshold_db=threshold_db, point_filter=rule)
     files = _capture_files(run.captures)
     receiver = None
     with progress() as bar:
