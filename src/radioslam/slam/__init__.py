@@ -1,8 +1,11 @@
-"""SLAM on radio point clouds (paper §IV-B): correlative scan matching with specular normals,
-submaps, branch-and-bound loop closure, a robust pose graph (GTSAM) and maps."""
+"""SLAM on radio point clouds (paper §IV-B): a front end that registers each scan against a local
+map whatever the motion (global rotation search from specular normals, branch and bound,
+correlative refinement), submaps, loop closure and relocalization, a robust pose graph (GTSAM)
+and maps."""
 
-from radioslam.slam.config import SlamConfig
+from radioslam.slam.config import SlamConfig, load_slam_config
 from radioslam.slam.driver import RadioSlam, SlamResult
 from radioslam.slam.errors import SlamError
+from radioslam.slam.status import ScanStatus
 
-__all__ = ["RadioSlam", "SlamConfig", "SlamError", "SlamResult"]
+__all__ = ["RadioSlam", "ScanStatus", "SlamConfig", "SlamError", "SlamResult", "load_slam_config"]

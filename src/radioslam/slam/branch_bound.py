@@ -1,24 +1,32 @@
 """Branch-and-bound correlative scan matching over a wide window (Hess, Kohler, Rapp,
 Andor, "Real-time loop closure in 2D LIDAR SLAM", ICRA 2016, §V: "fast_correlative_scan_matcher").
 
-A node (θ, h, ox, oy) stands for the 2^h × 2^h translations [ox, ox + 2^h) × [oy, oy + 2^h)
-at one rotation; the mean over the points of the level-h max-pooled grid bounds the
+A node (a, h, ox, oy) stands for the 2^h × 2^h translations [ox, ox + 2^h) × [oy, oy + 2^h)
+at heading a; the mean over the points of the level-h max-pooled grid bounds the
 score of every translation in it. Level by level, nodes whose bound is below the
 threshold are pruned and the rest split into four; a greedy descent from the best node
 first raises the threshold to a score that is actually reached. At level 0 the bound
 is the score, so the result is the exhaustive search's best (an exact search, not a
 heuristic), at a fraction of the lookups. The leaf score includes the normal agreement;
 the coarser bounds leave it out (it is ≤ 1), so they stay admissible.
+
+The headings are any set (a window around a prediction, or the candidates of the global
+rotation search, :mod:`radioslam.slam.rotation_search`). With ``keep_ratio`` < 1 the search
+returns every leaf within that fraction of the best, not only the best: the threshold is
+then ``keep_ratio`` times the greedy score, which still never prunes such a leaf. Those
+leaves, grouped by non-maximum suppression, are the distinct hypotheses an ambiguity test
+compares.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from radioslam.slam.correlative import candidate_cells
+from radioslam.slam.correlative import heading_cells
 from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.se2 import wrap_angle
 
 
 @dataclass(frozen=True)
@@ -27,6 +35,14 @@ class BranchBoundResult:
     score: float
     evaluated: int  # candidate nodes scored (against the exhaustive search's count)
     exhaustive: int
+    candidates: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (C, 3) leaves within keep_ratio of the best, best first
+    scores: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (C,)
+
+
+def window_angles(window_rad: float, step: float) -> np.ndarray:
+    """Offsets −window … window in ``step`` (symmetric, 0 included)."""
+    half = np.floor(window_rad / step + 1e-9)
+    return step * np.arange(-half, half + 1)
 
 
 class BranchAndBound:
@@ -51,31 +67,41 @@ class BranchAndBound:
 
     def match(self, points: np.ndarray, normals: np.ndarray, prediction: np.ndarray, window_m: float,
               window_rad: float, angle_step: float, min_score: float) -> BranchBoundResult:
+        """The best pose within ±window of ``prediction`` (x, y, θ)."""
+        headings = prediction[2] + window_angles(window_rad, angle_step)
+        return self.search(points, normals, prediction[:2], headings, window_m, min_score)
+
+    def search(self, points: np.ndarray, normals: np.ndarray, centre: np.ndarray, headings: np.ndarray,
+               window_m: float, min_score: float, keep_ratio: float = 1.0) -> BranchBoundResult:
+        """Poses (x, y) within ±window_m of ``centre`` at each of ``headings`` (A,): the best, and
+        every leaf scoring at least ``keep_ratio`` times the best."""
         res = self.grid.resolution
-        angles = angle_step * np.arange(-np.floor(window_rad / angle_step), np.floor(window_rad / angle_step) + 1)
         reach = int(np.ceil(window_m / res))
-        cells = candidate_cells(self.grid, points, prediction, angles)
-        theta = prediction[2] + angles
+        centre = np.array([centre[0], centre[1], 0.0])
+        cells = heading_cells(self.grid, points, centre[:2], headings)
         top = 2**self.levels
         starts = np.arange(-reach, reach + 1, top)
-        ga, gx, gy = np.meshgrid(np.arange(len(angles)), starts, starts, indexing="ij")
+        ga, gx, gy = np.meshgrid(np.arange(len(headings)), starts, starts, indexing="ij")
         nodes = np.stack([ga.ravel(), gx.ravel(), gy.ravel()], axis=1)
+        exhaustive = len(headings) * (2 * reach + 1) ** 2
         threshold, evaluated = min_score, 0
         for level in range(self.levels, -1, -1):
-            bound = self._scores(cells, normals, theta, nodes, level)
+            bound = self._scores(cells, normals, headings, nodes, level)
             evaluated += len(nodes)
             if level > 0:
-                threshold = max(threshold, self._greedy(cells, normals, theta, nodes[np.argmax(bound)], level, reach))
-            nodes = nodes[bound >= threshold]
+                greedy = self._greedy(cells, normals, headings, nodes[np.argmax(bound)], level, reach)
+                threshold = max(threshold, keep_ratio * greedy)
+            kept = bound >= threshold
+            nodes, bound = nodes[kept], bound[kept]
             if len(nodes) == 0:
-                return BranchBoundResult(None, 0.0, evaluated, len(angles) * (2 * reach + 1) ** 2)
+                return BranchBoundResult(None, 0.0, evaluated, exhaustive)
             if level > 0:
                 nodes = self._children(nodes, level, reach)
-        best = np.argmax(bound[bound >= threshold])
-        a, ox, oy = nodes[best]
-        pose = prediction + np.array([ox * res, oy * res, angles[a]])
-        return BranchBoundResult(pose, float(bound[bound >= threshold][best]), evaluated,
-                                 len(angles) * (2 * reach + 1) ** 2)
+        order = np.argsort(-bound, kind="stable")
+        order = order[bound[order] >= keep_ratio * bound[order[0]]]
+        a, ox, oy = nodes[order, 0], nodes[order, 1], nodes[order, 2]
+        poses = np.stack([centre[0] + ox * res, centre[1] + oy * res, wrap_angle(headings[a])], axis=1)
+        return BranchBoundResult(poses[0], float(bound[order[0]]), evaluated, exhaustive, poses, bound[order])
 
     def _greedy(self, cells, normals, theta, node, level, reach) -> float:
         """Score of the leaf reached by always taking the best child: a reachable lower bound."""
@@ -86,3 +112,18 @@ class BranchAndBound:
                 return 0.0
             nodes = nodes[[np.argmax(self._scores(cells, normals, theta, nodes, h - 1))]]
         return float(self._scores(cells, normals, theta, nodes, 0)[0])
+
+
+def distinct(poses: np.ndarray, scores: np.ndarray, radius_m: float, radius_rad: float,
+             count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Non-maximum suppression of candidates (C, 3) sorted best first: up to ``count`` poses
+    none of which lies within ``radius_m`` and ``radius_rad`` of a better one."""
+    left = np.arange(len(poses))
+    keep = []
+    while len(left) and len(keep) < count:
+        best = left[0]
+        keep.append(best)
+        near = (np.linalg.norm(poses[left, :2] - poses[best, :2], axis=1) <= radius_m) & \
+               (np.abs(wrap_angle(poses[left, 2] - poses[best, 2])) <= radius_rad)
+        left = left[~near]
+    return poses[keep], scores[keep]

@@ -1,51 +1,178 @@
-"""SLAM settings (paper §IV-B). Lengths in metres, angles in degrees at this interface only."""
+"""SLAM settings (paper §IV-B), one section per component (issue #12). Lengths in metres, angles
+in degrees at this interface only. Loadable from the ``slam:`` section of a YAML config file
+(:func:`load_slam_config`); every tuning constant of the SLAM lives here, none in the code.
+"""
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict, Field
+from pathlib import Path
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from radioslam.slam.errors import SlamError
 
 
-class SlamConfig(BaseModel):
-    """Every SLAM parameter; a factory builds each stage from these plain values."""
-
+class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
-    resolution_m: float = Field(0.05, gt=0)  # likelihood and occupancy grid cell
+
+class GridConfig(_Section):
+    """The likelihood field every matcher scores against (Olson 2009 §III)."""
+
+    resolution_m: float = Field(0.05, gt=0)
     # point likelihood exp(−d²/2σ²): radio points sit 1–7 cm off their wall (range error ≈ mm,
     # the beam direction quantized to the codebook); σ also absorbs submap blur
     sigma_m: float = Field(0.05, gt=0)
     # specular normals agree to ±σ_ψ (arc peaks locate a wall normal to ~0.1°; the coarse search steps 0.5°)
     normal_sigma_deg: float = Field(1.0, gt=0)
     # points with a normal are scored point-to-plane within this distance of the nearest map point
-    plane_reach_m: float = Field(0.5, ge=0)
-    project_arcs: bool = False  # arc points placed where their beam meets the arc's wall line (tried: worse)
+    plane_reach_m: float = Field(1.5, ge=0)
+    # max-pooled pyramid levels of branch and bound: the coarsest cell is 2^levels cells wide
+    branch_levels: int = Field(4, ge=1, le=8)
+
+
+class ScanConfig(_Section):
+    """How a radio scan becomes matchable points (:mod:`radioslam.slam.normals`)."""
+
     min_points: int = Field(8, ge=3)  # a scan with fewer points is skipped with a warning
-    submap_scans: int = Field(7, ge=1)  # consecutive scans per submap (MATLAB lidarSLAM's default)
+    arc_range_m: float = Field(0.10, gt=0)  # consecutive beams within this range form one arc
+    project_arcs: bool = False  # arc points placed where their beam meets the arc's wall line (tried: worse)
+    # degeneracy (Zhang et al. 2016): line fits through neighbours within this radius where no
+    # specular normal is known; a point within this many σ of the map agrees with it
+    neighbour_radius_m: float = Field(0.5, gt=0)
+    neighbours: int = Field(6, ge=3)
+    inlier_sigmas: float = Field(2.0, gt=0)
+
+
+class FrontEndConfig(_Section):
+    """Scan-to-local-map matching (:mod:`radioslam.slam.front_end`)."""
+
     local_map_scans: int = Field(10, ge=1)  # the front end matches against this many latest scans
-    # front end: correlative window around the constant-velocity prediction
+    # and against up to this many older scans taken within nearby_radius_m of the last pose
+    nearby_scans: int = Field(20, ge=0)
+    nearby_radius_m: float = Field(3.0, ge=0)
+    # the response surface (covariance, Olson 2009 §IV) and the final search: ±window around the winner
     window_m: float = Field(0.30, gt=0)
     window_deg: float = Field(6.0, gt=0)
     angle_step_deg: float = Field(0.5, gt=0)
-    # added to every front-end covariance: the response surface treats the points as independent
-    # and is over-confident; these are the step errors measured against the truth on paper-cnv
-    # (sd 1.5–2.3 cm and 0.3° per scan, seeds 1–5)
-    odometry_sigma_m: float = Field(0.02, ge=0)
-    odometry_sigma_deg: float = Field(0.3, ge=0)
-    # a front-end match whose normalized score is below this is not trusted: the pose is predicted
+    # global rotation search: normal-bearing histograms of scan and local map, circularly correlated
+    histogram_bin_deg: float = Field(1.0, gt=0)
+    histogram_smooth_deg: float = Field(2.0, gt=0)
+    rotation_candidates: int = Field(8, ge=1)  # strongest correlation peaks kept
+    rotation_window_deg: float = Field(3.0, gt=0)  # searched around each candidate and hypothesis
+    # a candidate's score is discounted by this fraction times its turn from the nearest motion
+    # hypothesis' heading in half turns (a 180° surprise loses it all): the motion prior
+    motion_prior: float = Field(0.15, ge=0, lt=1)
+    # two distinct candidates whose discounted scores differ by less than this fraction are ambiguous
+    ambiguity_margin: float = Field(0.08, ge=0, lt=1)
+    # candidates nearer than this in position and heading are one hypothesis (non-maximum suppression)
+    distinct_m: float = Field(0.3, gt=0)
+    distinct_deg: float = Field(6.0, gt=0)
+    # a match scored below min_match_score is not trusted; between it and min + trust_ramp its
+    # weight against the prediction grows smoothly from 0 to 1 (no cliff at the threshold)
     min_match_score: float = Field(0.25, ge=0, le=1)
-    # loop closure: branch and bound over a wide window
-    loop_radius_m: float = Field(3.0, gt=0)  # candidate submaps within this distance
-    loop_skip_submaps: int = Field(2, ge=0)  # never the most recent ones
-    loop_window_m: float = Field(1.5, gt=0)
-    loop_window_deg: float = Field(20.0, gt=0)
-    loop_min_score: float = Field(0.35, ge=0, le=1)  # normalized score: mean point likelihood
-    loop_gate_chi2: float = Field(16.27, gt=0)  # χ²(3) at 99.9 %: consistency with the graph
-    # pose graph
-    gnc: bool = True  # loop factors robust to false closures (GncLMOptimizer)
+    trust_ramp: float = Field(0.10, gt=0)
     # a match is degenerate when its surfaces' information (Σ n nᵀ) or its covariance is this
     # elongated (ratio of standard deviations): a direction nothing fixes
     degenerate_ratio: float = Field(4.0, gt=1)
-    # along such a direction the step is the median length of this many latest straight steps that
-    # observed every direction (the walker's pace), not the last step: one step's speed is a poor
-    # guess for many steps ahead
+    # added to every front-end covariance: the response surface treats the points as independent
+    # and is over-confident; these are the step errors measured against the truth on paper-cnv
+    # (sd 1.5–2.3 cm and 0.3° per scan, seeds 1–5)
+    floor_sigma_m: float = Field(0.02, ge=0)
+    floor_sigma_deg: float = Field(0.3, ge=0)
+    # a scan is lost when its best score is below this after the search: the loop closer relocalizes it
+    lost_score: float = Field(0.20, ge=0, le=1)
+
+
+class MotionConfig(_Section):
+    """The motion model (:mod:`radioslam.slam.motion`): hypotheses, not a window centre."""
+
+    # the translation search covers this far from the last pose whatever the turn (steps up to 1 m)
+    max_step_m: float = Field(1.3, gt=0)
+    # along a weak direction the step is the median length of this many latest straight steps that
+    # observed every direction (the walker's pace), not the last step
     pace_scans: int = Field(10, ge=1)
+    straight_deg: float = Field(2.0, gt=0)  # a step turning less than this walks straight: the pace applies
+    # a pose the scans cannot fix (skipped, predicted) is tied to its neighbour this loosely
+    predicted_sigma_m: float = Field(0.5, gt=0)
+    predicted_sigma_deg: float = Field(10.0, gt=0)
+    # a relocalized scan's jump from the pose before it: next to no information
+    relocalized_sigma_m: float = Field(100.0, gt=0)
+    relocalized_sigma_deg: float = Field(180.0, gt=0)
+    # external odometry (--odometry FILE): per-step noise of its relative motion, as between factors
+    odometry_sigma_m: float = Field(0.05, gt=0)
+    odometry_sigma_deg: float = Field(2.0, gt=0)
+
+
+class LoopClosureConfig(_Section):
+    """Submaps, loop closure and relocalization (:mod:`radioslam.slam.loop_closer`)."""
+
+    submap_scans: int = Field(7, ge=1)  # consecutive scans per submap (MATLAB lidarSLAM's default)
+    radius_m: float = Field(3.0, gt=0)  # candidate submaps within this distance
+    skip_submaps: int = Field(2, ge=0)  # never the most recent ones
+    window_m: float = Field(1.5, gt=0)
+    window_deg: float = Field(20.0, gt=0)
+    min_score: float = Field(0.35, ge=0, le=1)  # normalized score: mean point likelihood
+    # a loop's weight grows smoothly from 0 at min_score to 1 at min_score + score_ramp, and falls
+    # smoothly to 0 as its χ² approaches the gate (no cliff where a loop is accepted)
+    score_ramp: float = Field(0.10, gt=0)
+    gate_chi2: float = Field(16.27, gt=0)  # χ²(3) at 99.9 %: consistency with the graph
+    # relocalization after a lost scan: every submap, full rotation, translation over its extent
+    relocalize_min_score: float = Field(0.35, ge=0, le=1)
+    relocalize_margin_m: float = Field(2.0, ge=0)  # beyond the submap's points
+    relocalize_levels: int = Field(6, ge=1, le=10)  # branch-and-bound levels for a search that wide
+
+
+class PoseGraphConfig(_Section):
+    """The pose graph (:mod:`radioslam.slam.back_end`)."""
+
+    gnc: bool = True  # loop factors robust to false closures (GncLMOptimizer)
+    prior_sigma_m: float = Field(1e-4, gt=0)
+    prior_sigma_deg: float = Field(5.7e-4, gt=0)
+
+
+class MapConfig(_Section):
+    """The occupancy grid and fused cloud written after the run (:mod:`radioslam.slam.occupancy`)."""
+
+    resolution_m: float = Field(0.05, gt=0)
+    log_odds_hit: float = 0.85  # p = 0.7
+    log_odds_miss: float = -0.4  # p = 0.4
+    log_odds_limit: float = Field(5.0, gt=0)
+    # a ray clears free space up to this short of its echo (a beam is ~13° wide: what it saw lies
+    # anywhere across it at that range), and never a cell that holds a point of any scan
+    free_stop_m: float = Field(0.3, ge=0)
+    margin_m: float = Field(0.5, ge=0)
+
+
+class SlamConfig(_Section):
+    """Every SLAM parameter, one section per component; factories build each from its section."""
+
+    grid: GridConfig = Field(default_factory=GridConfig)
+    scan: ScanConfig = Field(default_factory=ScanConfig)
+    front_end: FrontEndConfig = Field(default_factory=FrontEndConfig)
+    motion: MotionConfig = Field(default_factory=MotionConfig)
+    loop_closure: LoopClosureConfig = Field(default_factory=LoopClosureConfig)
+    pose_graph: PoseGraphConfig = Field(default_factory=PoseGraphConfig)
+    map: MapConfig = Field(default_factory=MapConfig)
+
+
+def load_slam_config(path: str | Path) -> SlamConfig:
+    """The ``slam:`` section of a YAML config file (other sections are left to their stages)."""
+    path = Path(path)
+    try:
+        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SlamError("no such file", file=path, field="(file)") from None
+    except yaml.YAMLError as exc:
+        raise SlamError(f"not YAML: {str(exc).splitlines()[0]}", file=path, field="(file)") from None
+    if doc is None:
+        doc = {}
+    if not isinstance(doc, dict):
+        raise SlamError("a config file is a mapping of sections", file=path, field="(top)")
+    try:
+        return SlamConfig.model_validate(doc.get("slam") or {})
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        where = ".".join(["slam", *(str(p) for p in first["loc"])])
+        raise SlamError(first["msg"], file=path, field=where) from None

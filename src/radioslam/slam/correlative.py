@@ -29,11 +29,16 @@ class Match:
     at_edge: bool = False  # the best candidate lies on the window's border
 
 
+def heading_cells(grid: LikelihoodGrid, points: np.ndarray, xy: np.ndarray, headings: np.ndarray) -> np.ndarray:
+    """Cells (A, P, 2) of the scan points rotated to each heading (A,) and placed at ``xy``."""
+    rotated = np.einsum("aij,pj->api", rotation(headings), points)
+    return np.floor((rotated + np.asarray(xy)[:2] - grid.origin) / grid.resolution).astype(np.int64)
+
+
 def candidate_cells(grid: LikelihoodGrid, points: np.ndarray, pose: np.ndarray,
                     angles: np.ndarray) -> np.ndarray:
     """Cells (A, P, 2) of the scan points rotated by pose θ + each angle and placed at pose x, y."""
-    rotated = np.einsum("aij,pj->api", rotation(pose[2] + angles), points)
-    return np.floor((rotated + pose[:2] - grid.origin) / grid.resolution).astype(np.int64)
+    return heading_cells(grid, points, pose[:2], pose[2] + angles)
 
 
 def candidate_likelihoods(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, pose: np.ndarray,
@@ -51,7 +56,8 @@ def correlative_match(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndar
                       window_m: float, window_rad: float, angle_step: float) -> Match:
     """Best pose of ``points`` (P, 2) with specular ``normals`` (P,) in ``grid`` within ±window of
     ``prediction`` (x, y, θ)."""
-    angles = angle_step * np.arange(-np.floor(window_rad / angle_step), np.floor(window_rad / angle_step) + 1)
+    angles = angle_step * np.arange(-np.floor(window_rad / angle_step + 1e-9),
+                                    np.floor(window_rad / angle_step + 1e-9) + 1)
     reach = int(np.ceil(window_m / grid.resolution))
     offsets = np.arange(-reach, reach + 1)
     like = candidate_likelihoods(grid, points, normals, prediction, angles, offsets)

@@ -10,7 +10,7 @@ is then (Zhang §III, point-to-plane residuals with unit weight per point)
 
 with φ_p the specular normal of the point's arc (:mod:`radioslam.slam.normals`) or,
 for a point without one, the normal of the line through its neighbours within
-``NEIGHBOUR_RADIUS_M`` (an isolated point, e.g. a sidelobe outlier, counts for
+``radius`` (an isolated point, e.g. a sidelobe outlier, counts for
 nothing). The direction of J's smallest eigenvalue is the one the scan sees least;
 in a straight corridor both walls share one normal axis, λ_min = 0, and a correlative
 match along it reports zero motion with confidence (the arcs move with the terminal).
@@ -22,23 +22,49 @@ by the prediction's.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.spatial import cKDTree
 
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.se2 import rotation, transform_points
 
-NEIGHBOUR_RADIUS_M = 0.5
-NEIGHBOURS = 6  # the point itself and up to five others
-INLIER_LIKELIHOOD = float(np.exp(-0.5 * 2.0**2))  # a point within 2σ of the map agrees with it
+
+@dataclass(frozen=True)
+class DegeneracyTest:
+    """The settings of the tests below, from the ``scan`` and ``front_end`` config sections."""
+
+    max_ratio: float  # elongation (ratio of standard deviations) beyond which a direction is weak
+    neighbour_radius: float  # line fits through neighbours within this radius where no normal is known
+    neighbours: int  # the point itself and up to neighbours − 1 others
+    inlier_sigmas: float  # a point within this many σ of the map agrees with it
+
+    def weak(self, points: np.ndarray, normals: np.ndarray, heading: float,
+             covariance: np.ndarray) -> np.ndarray | None:
+        return weak_direction(points, normals, heading, covariance, self.max_ratio, self.neighbour_radius,
+                              self.neighbours)
+
+    def matched_weak(self, grid: LikelihoodGrid, pose: np.ndarray, points: np.ndarray, normals: np.ndarray,
+                     covariance: np.ndarray) -> np.ndarray | None:
+        agree = agreeing(grid, pose, points, normals, self.inlier_sigmas)
+        return self.weak(points[agree], normals[agree], pose[2], covariance)
 
 
-def line_normals(points: np.ndarray, radius: float = NEIGHBOUR_RADIUS_M) -> np.ndarray:
+def agreeing(grid: LikelihoodGrid, pose: np.ndarray, points: np.ndarray, normals: np.ndarray,
+             inlier_sigmas: float) -> np.ndarray:
+    """Mask (P,) of the points whose likelihood at ``pose`` is that of a point within
+    ``inlier_sigmas`` σ of the map: the points that agree with it."""
+    threshold = np.exp(-0.5 * inlier_sigmas**2)
+    return grid.interpolate(transform_points(pose, points), ~np.isnan(normals))[0] >= threshold
+
+
+def line_normals(points: np.ndarray, radius: float, neighbours: int) -> np.ndarray:
     """Normal bearing (P,) of the line fitted through each point's neighbours within
     ``radius`` (principal axes of their scatter); NaN with fewer than three points."""
     if len(points) < 3:
         return np.full(len(points), np.nan)
-    dist, idx = cKDTree(points).query(points, k=min(NEIGHBOURS, len(points)), distance_upper_bound=radius)
+    dist, idx = cKDTree(points).query(points, k=min(neighbours, len(points)), distance_upper_bound=radius)
     near = np.isfinite(dist)
     nbr = np.where(near[..., None], points[np.minimum(idx, len(points) - 1)], 0.0)
     count = near.sum(axis=1)
@@ -49,38 +75,30 @@ def line_normals(points: np.ndarray, radius: float = NEIGHBOUR_RADIUS_M) -> np.n
     return np.where(count >= 3, major + np.pi / 2, np.nan)
 
 
-def information(points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+def information(points: np.ndarray, normals: np.ndarray, radius: float, neighbours: int) -> np.ndarray:
     """J (2, 2) = Σ n nᵀ, specular normals where known, neighbour lines elsewhere."""
     unknown = np.isnan(normals)
-    phi = np.where(unknown, line_normals(points), normals) if unknown.any() else normals
+    phi = np.where(unknown, line_normals(points, radius, neighbours), normals) if unknown.any() else normals
     phi = phi[~np.isnan(phi)]
     u = np.stack([np.cos(phi), np.sin(phi)], axis=1)
     return u.T @ u
 
 
 def weak_direction(points: np.ndarray, normals: np.ndarray, heading: float, covariance: np.ndarray,
-                   max_ratio: float) -> np.ndarray | None:
+                   max_ratio: float, radius: float, neighbours: int) -> np.ndarray | None:
     """The world-frame unit direction (2,) a match at ``heading`` cannot observe, or None.
 
     Flagged when the scan's information J, or the match's own position covariance (the
     response surface sees other ambiguities too), is elongated beyond ``max_ratio``
     standard deviations.
     """
-    eig, vec = np.linalg.eigh(information(points, normals))
+    eig, vec = np.linalg.eigh(information(points, normals, radius, neighbours))
     if _elongation(eig) > max_ratio:
         return rotation(heading) @ vec[:, 0]  # least information
     eig, vec = np.linalg.eigh(covariance[:2, :2])
     if _elongation(eig) > max_ratio:
         return vec[:, -1]  # most variance
     return None
-
-
-def matched_weak_direction(grid: LikelihoodGrid, pose: np.ndarray, points: np.ndarray, normals: np.ndarray,
-                           covariance: np.ndarray, max_ratio: float) -> np.ndarray | None:
-    """:func:`weak_direction` of only the points that agree with ``grid`` at ``pose``: a wall the
-    map has not seen yet constrains nothing, so a match on one wall in common slides along it."""
-    agree = grid.interpolate(transform_points(pose, points), ~np.isnan(normals))[0] >= INLIER_LIKELIHOOD
-    return weak_direction(points[agree], normals[agree], pose[2], covariance, max_ratio)
 
 
 def _elongation(eigenvalues: np.ndarray) -> float:

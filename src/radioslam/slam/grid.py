@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.ndimage import distance_transform_edt, maximum_filter1d
+from scipy.ndimage import distance_transform_edt
 
 from radioslam.slam.errors import SlamError
 from radioslam.slam.se2 import wrap_angle
@@ -137,7 +137,10 @@ class LikelihoodGrid:
     def pyramid(self, levels: int) -> list[np.ndarray]:
         """Max-pooled fields (2, NX, NY) as in ``fields``: level h holds the max over cells
         [i, i + 2^h) × [j, j + 2^h)."""
-        return [np.stack([max_pool(self.values, h), max_pool(self.plane_values, h)]) for h in range(levels + 1)]
+        levels_out = [self.fields]
+        for h in range(1, levels + 1):
+            levels_out.append(_pool_twice(levels_out[-1], 2 ** (h - 1)))
+        return levels_out
 
 
 def _gaussian(distance: np.ndarray, sigma: float) -> np.ndarray:
@@ -148,11 +151,11 @@ def _gaussian(distance: np.ndarray, sigma: float) -> np.ndarray:
     return out
 
 
-def max_pool(values: np.ndarray, level: int) -> np.ndarray:
-    """The max over cells [i, i + 2^level) × [j, j + 2^level) (0 beyond the grid)."""
-    width = 2**level
-    if width == 1:
-        return values
-    # a window [i, i + w) is maximum_filter1d's centred window shifted by (w − 1) // 2
-    g = maximum_filter1d(values, width, axis=0, mode="constant", cval=0.0, origin=-(width // 2))
-    return maximum_filter1d(g, width, axis=1, mode="constant", cval=0.0, origin=-(width // 2))
+def _pool_twice(fields: np.ndarray, shift: int) -> np.ndarray:
+    """max(F[i, j], F[i + s, j], F[i, j + s], F[i + s, j + s]) over the last two axes, 0 beyond:
+    the max over [i, i + 2s) from two windows [i, i + s) and [i + s, i + 2s) of the level below."""
+    out = fields.copy()
+    out[:, :-shift, :] = np.maximum(out[:, :-shift, :], fields[:, shift:, :])
+    wider = out.copy()
+    wider[:, :, :-shift] = np.maximum(wider[:, :, :-shift], out[:, :, shift:])
+    return wider

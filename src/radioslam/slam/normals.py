@@ -9,7 +9,7 @@ through the strongest beam and its two neighbours (in dB against beam angle) giv
 normal's bearing φ to about 0.1° (against a beam spacing of 1.8°).
 
 Each point of such an arc (consecutive beams of one orientation, ranges within
-``ARC_RANGE_M`` of each other, an interior power peak) carries the arc's φ; other
+``arc_range_m`` of each other, an interior power peak) carries the arc's φ; other
 points carry NaN (no normal known).
 """
 
@@ -20,10 +20,8 @@ import numpy as np
 from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.se2 import wrap_angle
 
-ARC_RANGE_M = 0.10
 
-
-def specular_normals(scan: Scan) -> np.ndarray:
+def specular_normals(scan: Scan, arc_range_m: float) -> np.ndarray:
     """Terminal-frame bearing (P,) of the surface normal each point's echo came from; NaN: unknown."""
     normals = np.full(len(scan), np.nan)
     if len(scan) < 3:
@@ -34,7 +32,7 @@ def specular_normals(scan: Scan) -> np.ndarray:
     boresight = orient * (np.pi / 2)
     angle = wrap_angle(scan.angle_rad[order] - boresight)  # off this orientation's boresight: no ±π seam
     # arcs: runs of consecutive beams on one orientation at one range
-    breaks = (np.diff(beam) != 1) | (np.diff(orient) != 0) | (np.abs(np.diff(rng)) > ARC_RANGE_M)
+    breaks = (np.diff(beam) != 1) | (np.diff(orient) != 0) | (np.abs(np.diff(rng)) > arc_range_m)
     arc = np.concatenate([[0], np.cumsum(breaks)])
     start = np.flatnonzero(np.concatenate([[True], breaks]))
     end = np.concatenate([start[1:], [len(arc)]])

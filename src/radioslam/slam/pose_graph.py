@@ -14,8 +14,6 @@ import numpy as np
 
 from radioslam.slam.se2 import rotation
 
-PRIOR_SIGMA = np.array([1e-4, 1e-4, 1e-5])
-
 
 def _pose2(p: np.ndarray) -> gtsam.Pose2:
     return gtsam.Pose2(float(p[0]), float(p[1]), float(p[2]))
@@ -35,13 +33,14 @@ class PoseGraph:
     inliers: list[int] = field(default_factory=list)  # factor indices GNC must keep
     loops: list[tuple[int, int]] = field(default_factory=list)
     version: int = 0  # counts the solutions: estimates derived from an older one are stale
+    prior_sigmas: np.ndarray = field(default_factory=lambda: np.array([1e-4, 1e-4, 1e-5]))  # the first pose
 
     def add_pose(self, key: int, pose: np.ndarray) -> None:
         if not self.initial.exists(key):
             self.initial.insert(key, _pose2(pose))
         if self.graph.size() == 0:
             self.inliers.append(self.graph.size())
-            self.graph.add(gtsam.PriorFactorPose2(key, _pose2(pose), gtsam.noiseModel.Diagonal.Sigmas(PRIOR_SIGMA)))
+            self.graph.add(gtsam.PriorFactorPose2(key, _pose2(pose), gtsam.noiseModel.Diagonal.Sigmas(self.prior_sigmas)))
 
     def _between(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray) -> None:
         noise = gtsam.noiseModel.Gaussian.Covariance(np.asarray(covariance, dtype=np.float64))
@@ -51,7 +50,12 @@ class PoseGraph:
         self.inliers.append(self.graph.size())
         self._between(i, j, relative, covariance)
 
-    def add_loop(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray) -> None:
+    def add_loop(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray,
+                 known_inlier: bool = False) -> None:
+        """A loop factor; GNC may reject it unless ``known_inlier`` (a relocalization, the only tie
+        of a lost pose to the map)."""
+        if known_inlier:
+            self.inliers.append(self.graph.size())
         self.loops.append((i, j))
         self._between(i, j, relative, covariance)
 

@@ -7,7 +7,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.se2 import between, transform_points
 
 
@@ -27,10 +26,3 @@ def fused_points(keys: list[int], poses: dict[int, np.ndarray], points: dict[int
     xy = np.concatenate([transform_points(r, points[k]) for r, k in zip(rel, keys)])
     nrm = np.concatenate([normals[k] + r[2] for r, k in zip(rel, keys)])
     return xy, nrm
-
-
-def submap_grid(submap: Submap, poses, points, normals, resolution: float, sigma: float, margin: float,
-                normal_sigma: float, plane_reach: float) -> LikelihoodGrid:
-    """The likelihood grid of a submap in its anchor's frame."""
-    xy, nrm = fused_points(submap.keys, poses, points, normals, poses[submap.anchor])
-    return LikelihoodGrid.from_points(xy, resolution, sigma, margin, nrm, normal_sigma, plane_reach)

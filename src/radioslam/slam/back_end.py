@@ -1,0 +1,78 @@
+"""The back end (issue #12): owns the pose graph (:mod:`radioslam.slam.pose_graph`), the latest
+pose estimates, and when to optimize: whenever loop closures were added, and once at the end.
+
+Each front-end step becomes a between factor from the previous pose with the step's
+covariance expressed in that pose's frame; external odometry adds its own between factor
+per step (an independent measurement of the same motion); loop closures and relocalizations
+come from the loop closer.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from radioslam.slam.config import MotionConfig, PoseGraphConfig
+from radioslam.slam.front_end import Step
+from radioslam.slam.loop_closer import LoopClosure
+from radioslam.slam.pose_graph import PoseGraph, local_covariance
+from radioslam.slam.se2 import between, compose
+
+
+class BackEnd:
+    def __init__(self, cfg: PoseGraphConfig, motion: MotionConfig):
+        self.cfg = cfg
+        self.graph = PoseGraph(prior_sigmas=np.array([cfg.prior_sigma_m, cfg.prior_sigma_m,
+                                                      np.radians(cfg.prior_sigma_deg)]))
+        self.odometry_noise = np.diag([motion.odometry_sigma_m**2] * 2 + [np.radians(motion.odometry_sigma_deg) ** 2])
+        self.estimates: dict[int, np.ndarray] = {}  # the latest solution, every pose so far
+        self.chain: dict[int, np.ndarray] = {}  # the front end's steps composed: no loops, no optimization
+        self.step_covariance: dict[int, np.ndarray] = {}  # each step's covariance in its previous pose's frame
+        self.loops: list[LoopClosure] = []
+
+    @classmethod
+    def from_config(cls, cfg) -> "BackEnd":
+        return cls(cfg.pose_graph, cfg.motion)
+
+    @property
+    def version(self) -> int:
+        """Counts the solutions: anything derived from an older one is stale."""
+        return self.graph.version
+
+    def add(self, k: int, step: Step, odometry_step: np.ndarray | None = None) -> None:
+        """Pose k and the factors tying it to pose k − 1."""
+        previous = self.estimates.get(k - 1)
+        self.graph.add_pose(k, step.pose)
+        if previous is None:
+            self.chain[k] = step.pose
+        else:
+            relative = between(previous, step.pose)
+            self.step_covariance[k] = local_covariance(step.covariance, previous[2])
+            self.graph.add_odometry(k - 1, k, relative, self.step_covariance[k])
+            if odometry_step is not None:
+                self.graph.add_odometry(k - 1, k, odometry_step, self.odometry_noise)
+            self.chain[k] = compose(self.chain[k - 1], relative)
+        self.estimates[k] = step.pose
+
+    def add_loops(self, loops: list[LoopClosure]) -> None:
+        """Loop closures (and relocalizations) into the graph, then a new solution."""
+        for loop in loops:
+            self.graph.add_loop(loop.anchor, loop.key, loop.relative, loop.covariance, known_inlier=loop.relocalization)
+            self.loops.append(loop)
+        if loops:
+            self.estimates.update(self.graph.optimize(self.cfg.gnc))
+
+    def relocalized_pose(self, loop: LoopClosure) -> np.ndarray:
+        """The world pose a relocalization places its scan at."""
+        return compose(self.estimates[loop.anchor], loop.relative)
+
+    def drift(self, anchor: int, key: int, distance: float) -> np.ndarray:
+        """First-order drift between two poses: the step covariances summed, the heading's variance
+        also spreading the position by the distance between them."""
+        total = sum((self.step_covariance[m] for m in range(anchor + 1, key + 1) if m in self.step_covariance),
+                    np.zeros((3, 3)))
+        return total + np.diag([total[2, 2] * distance**2] * 2 + [0.0])
+
+    def finish(self) -> None:
+        """A last solution when any loop was closed."""
+        if self.loops:
+            self.estimates.update(self.graph.optimize(self.cfg.gnc))

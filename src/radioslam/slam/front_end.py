@@ -1,0 +1,206 @@
+"""The front end (paper §IV-B; issue #12): each scan registered against a local map of the
+latest scans, whatever the motion since the last one.
+
+Like PRBonn/kiss-icp's ``KissICP.register_frame`` and Cartographer's
+``LocalTrajectoryBuilder2D``, it owns the motion model and the local map. What it adds is
+that the rotation comes from the scan itself: the candidates of the global rotation search
+(:mod:`radioslam.slam.rotation_search`) and the motion model's hypotheses (standing still,
+constant velocity, the last turn repeated, odometry) are all searched, each over every
+translation within ``max_step_m`` of the last pose, by one branch-and-bound search
+(Hess et al. 2016 §V). Distinct candidates within ``ambiguity_margin`` of the best make
+the scan ambiguous: the one nearest the primary hypothesis is taken, its covariance widened
+over the others. The winner's response surface gives the covariance (Olson 2009 §IV) and a
+least-squares fit refines it. A direction no wall fixes keeps the paced prediction
+(Zhang et al. 2016). A weak match is weighed against the prediction smoothly; one the map
+does not support at all is lost, for the loop closer to relocalize.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from radioslam.sensing.pointcloud import Scan
+from radioslam.slam.branch_bound import BranchAndBound, distinct, window_angles
+from radioslam.slam.config import FrontEndConfig, GridConfig, MotionConfig, ScanConfig
+from radioslam.slam.correlative import correlative_match
+from radioslam.slam.degeneracy import DegeneracyTest, remap
+from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.motion import MotionModel
+from radioslam.slam.normals import specular_normals, wall_points
+from radioslam.slam.refine import refine_pose
+from radioslam.slam.rotation_search import merge_headings, rotation_candidates
+from radioslam.slam.se2 import between, wrap_angle
+from radioslam.slam.status import ScanStatus
+from radioslam.slam.submap import fused_points
+
+
+@dataclass(frozen=True)
+class ScanPoints:
+    """A scan as the matchers see it: terminal-frame points and specular normal bearings."""
+
+    xy: np.ndarray  # (P, 2)
+    normals: np.ndarray  # (P,) NaN: no normal known
+
+    def __len__(self) -> int:
+        return len(self.xy)
+
+
+def prepare_points(scan: Scan, cfg: ScanConfig) -> ScanPoints:
+    """The scan's points with the specular normal of the arc each came from."""
+    phi = specular_normals(scan, cfg.arc_range_m)
+    return ScanPoints(wall_points(scan, phi) if cfg.project_arcs else scan.xy, phi)
+
+
+@dataclass(frozen=True)
+class Step:
+    """What the front end made of one scan: the world pose, its covariance, how it was found."""
+
+    pose: np.ndarray
+    covariance: np.ndarray  # (3, 3) world frame
+    status: ScanStatus
+    score: float = float("nan")  # normalized match score; NaN where nothing was matched
+    rivals: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # other hypotheses within the margin
+    note: str = ""  # why the status is not MATCHED, for the warnings
+
+
+def fuse(pose: np.ndarray, covariance: np.ndarray, weight: float, prior: np.ndarray,
+         prior_covariance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The match (covariance / weight) fused with a prior: the prior alone at weight 0, the
+    match alone as the prior's covariance grows; continuous in the weight."""
+    inner = np.linalg.inv(covariance + weight * prior_covariance)
+    gain = covariance @ inner  # K = (C/w)(C/w + C_p)⁻¹
+    d = prior - pose
+    d[2] = wrap_angle(d[2])
+    fused = pose + gain @ d
+    fused[2] = wrap_angle(fused[2])
+    fused_cov = prior_covariance @ inner @ covariance  # (I − K)·C/w, without dividing by w
+    return fused, 0.5 * (fused_cov + fused_cov.T)
+
+
+class FrontEnd:
+    """Built from plain settings by :meth:`from_config`; ``register`` then ``update`` per scan."""
+
+    def __init__(self, grid: GridConfig, scan: ScanConfig, cfg: FrontEndConfig, motion_cfg: MotionConfig,
+                 motion: MotionModel):
+        self.grid_cfg, self.scan_cfg, self.cfg, self.motion_cfg, self.motion = grid, scan, cfg, motion_cfg, motion
+        self.degeneracy = DegeneracyTest(cfg.degenerate_ratio, scan.neighbour_radius_m, scan.neighbours,
+                                         scan.inlier_sigmas)
+        self.step_rad = np.radians(cfg.angle_step_deg)
+        self.floor = np.diag([cfg.floor_sigma_m**2] * 2 + [np.radians(cfg.floor_sigma_deg) ** 2])
+        self.predicted = np.diag([motion_cfg.predicted_sigma_m**2] * 2 + [np.radians(motion_cfg.predicted_sigma_deg)**2])
+        self.keys: list[int] = []  # scans of the local map, oldest first
+        self.points: dict[int, ScanPoints] = {}
+
+    @classmethod
+    def from_config(cls, cfg, odometry: np.ndarray | None = None) -> "FrontEnd":
+        motion = MotionModel(cfg.motion.pace_scans, np.radians(cfg.motion.straight_deg), odometry)
+        return cls(cfg.grid, cfg.scan, cfg.front_end, cfg.motion, motion)
+
+    def register(self, k: int, points: ScanPoints, estimates: dict[int, np.ndarray]) -> Step:
+        """Scan k's pose; ``estimates`` holds every earlier pose (the latest solution)."""
+        last = estimates.get(k - 1)
+        if len(points) < self.scan_cfg.min_points:
+            pose = np.zeros(3) if last is None else self.motion.predict(k, last)
+            return Step(pose, self.predicted, ScanStatus.SKIPPED,
+                        note=f"{len(points)} points (< {self.scan_cfg.min_points}), skipped")
+        if not self.keys:  # the first scan defines the map frame
+            pose = np.zeros(3) if last is None else self.motion.predict(k, last)
+            return Step(pose, self.predicted, ScanStatus.MATCHED)
+        return self._match(k, points, estimates, last)
+
+    def _match(self, k: int, points: ScanPoints, estimates: dict[int, np.ndarray], last: np.ndarray) -> Step:
+        cfg, xy, phi = self.cfg, points.xy, points.normals
+        grid, map_normals = self._local_grid(estimates)
+        hypotheses = self.motion.hypotheses(k, last)
+        primary = hypotheses[0].pose
+        # every heading the scan's normals or the motion suggest, over every translation within a step
+        headings = merge_headings(np.concatenate([[h.pose[2] for h in hypotheses], rotation_candidates(
+            phi, map_normals, np.radians(cfg.histogram_bin_deg), np.radians(cfg.histogram_smooth_deg),
+            cfg.rotation_candidates)]), np.radians(cfg.rotation_window_deg))
+        offsets = window_angles(np.radians(cfg.rotation_window_deg), self.step_rad)
+        found = BranchAndBound(grid, self.grid_cfg.branch_levels).search(
+            xy, phi, last[:2], (headings[:, None] + offsets[None, :]).ravel(), self.motion_cfg.max_step_m, 0.0,
+            1.0 - cfg.motion_prior)
+        if found.pose is None:
+            return Step(primary, self.predicted, ScanStatus.PREDICTED, 0.0, note="nothing in the local map matches")
+        candidates, scores = distinct(found.candidates, found.scores, cfg.distinct_m, np.radians(cfg.distinct_deg),
+                                      cfg.rotation_candidates)
+        # the scores discounted by the turn from the nearest motion hypothesis' heading: a prior, not a
+        # window (every translation within a step is as likely)
+        turn = np.min(np.abs(wrap_angle(candidates[:, 2][:, None] - [h.pose[2] for h in hypotheses])), axis=1)
+        adjusted = scores * (1.0 - cfg.motion_prior * turn / np.pi)
+        chosen = int(np.argmax(adjusted))
+        rivals = np.delete(candidates, chosen, axis=0)[np.delete(adjusted, chosen) >=
+                                                       (1.0 - cfg.ambiguity_margin) * adjusted[chosen]]
+        match = correlative_match(grid, xy, phi, candidates[chosen], cfg.window_m, np.radians(cfg.window_deg),
+                                  self.step_rad)
+        pose = refine_pose(grid, xy, phi, match.pose, self.grid_cfg.resolution_m, self.step_rad)
+        cov = match.covariance + self.floor
+        weight = float(np.clip((match.score - cfg.min_match_score) / cfg.trust_ramp, 0.0, 1.0))
+        if weight == 0.0:
+            return Step(primary, self.predicted, ScanStatus.PREDICTED, match.score,
+                        note=f"match score {match.score:.2f} < {cfg.min_match_score:.2f}")
+        weak = self.degeneracy.matched_weak(grid, pose, xy, phi, cov)
+        if weak is not None:  # candidates that only slide along the weak direction are not rivals
+            across = (rivals[:, :2] - pose[:2]) - np.outer((rivals[:, :2] - pose[:2]) @ weak, weak)
+            rivals = rivals[(np.linalg.norm(across, axis=1) > cfg.distinct_m)
+                            | (np.abs(wrap_angle(rivals[:, 2] - pose[2])) > np.radians(cfg.distinct_deg))]
+        status, note = ScanStatus.MATCHED, ""
+        if weak is not None:
+            # a direction the walls cannot fix keeps the paced prediction there (Zhang et al. 2016)
+            pose, cov = remap(pose, cov, self.motion.paced(primary, last), weak, self.motion_cfg.predicted_sigma_m)
+            status = ScanStatus.DEGENERATE
+            note = (f"degenerate match, nothing fixes the position along "
+                    f"{np.degrees(np.arctan2(weak[1], weak[0])):.0f}° (predicted instead)")
+        if len(rivals):
+            # the scans cannot decide: widen the covariance over the rivals, keep the nearest to the motion
+            spread = rivals - pose
+            spread[:, 2] = wrap_angle(spread[:, 2])
+            cov = cov + spread.T @ spread / len(rivals)
+            status = ScanStatus.AMBIGUOUS
+            note = f"ambiguous: {len(rivals)} other pose(s) score within {cfg.ambiguity_margin:.0%}"
+        if weight < 1.0:
+            pose, cov = fuse(pose, cov, weight, primary, self.predicted)
+        return Step(pose, cov, status, match.score, rivals, note)
+
+    def _local_grid(self, estimates: dict[int, np.ndarray]) -> tuple[LikelihoodGrid, np.ndarray]:
+        """The likelihood field of the local map's scans at their latest poses (world frame), and the
+        map points' world normals."""
+        keys = self.local_map_keys(estimates)
+        xy, normals = fused_points(keys, estimates, {m: self.points[m].xy for m in keys},
+                                   {m: self.points[m].normals for m in keys}, np.zeros(3))
+        g = self.grid_cfg
+        margin = self.motion_cfg.max_step_m + self.cfg.window_m + 3 * g.sigma_m
+        grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, normals, np.radians(g.normal_sigma_deg),
+                                          g.plane_reach_m)
+        return grid, normals
+
+    def local_map_keys(self, estimates: dict[int, np.ndarray]) -> list[int]:
+        """The latest ``local_map_scans`` scans, and up to ``nearby_scans`` older ones taken within
+        ``nearby_radius_m`` of the last pose (nearest first): what saw the walls around the terminal,
+        as kiss-icp keeps every point within range of the current pose."""
+        recent, older = self.keys[-self.cfg.local_map_scans:], np.array(self.keys[:-self.cfg.local_map_scans], int)
+        if not len(older) or not self.cfg.nearby_scans:
+            return recent
+        here = estimates[self.keys[-1]][:2]
+        distance = np.linalg.norm(np.array([estimates[m][:2] for m in older]) - here, axis=1)
+        near = np.argsort(distance, kind="stable")[: self.cfg.nearby_scans]
+        near = near[distance[near] <= self.cfg.nearby_radius_m]
+        return sorted(older[near].tolist()) + recent
+
+    def update(self, k: int, step: Step, points: ScanPoints, previous: np.ndarray | None) -> None:
+        """Scan k joins the local map (unless skipped) and the motion model learns its step."""
+        if step.status is not ScanStatus.SKIPPED:
+            self.keys.append(k)
+            self.points[k] = points
+        jumped = previous is None or step.status is ScanStatus.RELOCALIZED
+        self.motion.update(None if jumped else between(previous, step.pose),
+                           observed=step.status is ScanStatus.MATCHED)
+
+    def relocalized(self, pose: np.ndarray, score: float) -> Step:
+        """The step of a lost scan that the loop closer found again at ``pose``."""
+        m = self.motion_cfg  # next to no information about the jump itself: the relocalization fixes the pose
+        jump = np.diag([m.relocalized_sigma_m**2] * 2 + [np.radians(m.relocalized_sigma_deg) ** 2])
+        return Step(pose, jump, ScanStatus.RELOCALIZED, score, note="lost, relocalized against the submaps")

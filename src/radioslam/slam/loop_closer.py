@@ -1,0 +1,193 @@
+"""Loop closure and relocalization against submaps (Cartographer's ``ConstraintBuilder2D``:
+Hess, Kohler, Rapp, Andor, "Real-time loop closure in 2D LIDAR SLAM", ICRA 2016, §V).
+
+The loop closer owns the submaps (N consecutive scans fused in the frame of the first),
+one branch-and-bound matcher per submap (built once per pose-graph solution) and the
+acceptance tests of a loop:
+
+- the normalized score (mean point likelihood, in [0, 1], independent of the number of points);
+- geometric consistency with the graph: the match must agree with the pose the odometry
+  predicts, within their joint covariance (a χ²(3) gate);
+- the information of the points that agree with the submap must fix every direction
+  (:mod:`radioslam.slam.degeneracy`): one wall in common lets the match slide along it.
+
+Score and χ² weigh a loop smoothly instead of flipping it (issue #12): its covariance is
+divided by a weight that rises from 0 at ``min_score`` to 1 at ``min_score + score_ramp``
+and falls from 1 at half the gate to 0 at the gate, so a loop on the edge of acceptance
+carries almost no weight either way.
+
+Relocalization (the global constraint search of Cartographer): a lost scan is matched
+against every submap, over the submap's whole extent and every heading the normals suggest
+(:mod:`radioslam.slam.rotation_search`); a match that scores ``relocalize_min_score``, is not
+degenerate and has no rival within the ambiguity margin places the scan again.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from radioslam.slam.branch_bound import BranchAndBound, distinct, window_angles
+from radioslam.slam.config import FrontEndConfig, GridConfig, LoopClosureConfig
+from radioslam.slam.correlative import correlative_match
+from radioslam.slam.degeneracy import DegeneracyTest
+from radioslam.slam.front_end import ScanPoints
+from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.refine import refine_pose
+from radioslam.slam.rotation_search import merge_headings, rotation_candidates
+from radioslam.slam.se2 import between, compose, wrap_angle
+from radioslam.slam.submap import Submap, fused_points
+
+
+@dataclass(frozen=True)
+class LoopClosure:
+    anchor: int  # the submap's first scan
+    key: int  # the current scan
+    relative: np.ndarray  # the current pose in the anchor's frame
+    covariance: np.ndarray  # already divided by the weight
+    score: float
+    weight: float = 1.0  # in (0, 1]: how far inside the acceptance tests it lies
+    relocalization: bool = False  # places a lost scan: the graph must keep it
+
+
+def mahalanobis2(measured: np.ndarray, predicted: np.ndarray, covariance: np.ndarray) -> float:
+    d = measured - predicted
+    d[2] = wrap_angle(d[2])
+    return float(d @ np.linalg.solve(covariance, d))
+
+
+def smooth_step(x: float) -> float:
+    """0 below 0, 1 above 1, 3x² − 2x³ between: continuous with its slope."""
+    x = float(np.clip(x, 0.0, 1.0))
+    return x * x * (3 - 2 * x)
+
+
+@dataclass
+class LoopCloser:
+    grid_cfg: GridConfig
+    cfg: LoopClosureConfig
+    front_cfg: FrontEndConfig
+    degeneracy: DegeneracyTest
+    submaps: list[Submap] = field(default_factory=list)
+    points: dict[int, ScanPoints] = field(default_factory=dict)
+    matchers: dict[tuple[int, int], tuple[int, BranchAndBound]] = field(default_factory=dict)
+
+    @classmethod
+    def from_config(cls, cfg) -> "LoopCloser":
+        f = cfg.front_end
+        test = DegeneracyTest(f.degenerate_ratio, cfg.scan.neighbour_radius_m, cfg.scan.neighbours,
+                              cfg.scan.inlier_sigmas)
+        return cls(cfg.grid, cfg.loop_closure, f, test)
+
+    def add(self, k: int, points: ScanPoints) -> None:
+        """Scan k joins the current submap (a new one every ``submap_scans`` scans)."""
+        if not self.submaps or len(self.submaps[-1].keys) >= self.cfg.submap_scans:
+            self.submaps.append(Submap())
+        self.submaps[-1].keys.append(k)
+        self.points[k] = points
+
+    def _grid(self, submap: Submap, estimates, margin: float) -> LikelihoodGrid:
+        g = self.grid_cfg
+        xy, nrm = fused_points(submap.keys, estimates, {m: self.points[m].xy for m in submap.keys},
+                               {m: self.points[m].normals for m in submap.keys}, estimates[submap.anchor])
+        return LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, nrm, np.radians(g.normal_sigma_deg),
+                                          g.plane_reach_m)
+
+    def _matcher(self, submap: Submap, estimates, version: int, margin: float, levels: int) -> BranchAndBound:
+        """The submap's matcher for this pose-graph solution (built once per solution)."""
+        key = (submap.anchor, levels)
+        if self.matchers.get(key, (None,))[0] != version:
+            self.matchers[key] = (version, BranchAndBound(self._grid(submap, estimates, margin), levels))
+        return self.matchers[key][1]
+
+    def close(self, k: int, estimates: dict[int, np.ndarray], version: int,
+              drift: Callable[[int, int, float], np.ndarray]) -> list[LoopClosure]:
+        """Verified loop closures of scan k against older submaps near its pose; ``drift(anchor, k,
+        distance)`` is the covariance the odometry accumulated between the two poses."""
+        current = estimates[k]
+        margin = max(self.front_cfg.window_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
+        found = []
+        for s in self.submaps[:max(0, len(self.submaps) - 1 - self.cfg.skip_submaps)]:
+            members = np.array([estimates[m][:2] for m in s.keys])
+            if np.min(np.linalg.norm(members - current[:2], axis=1)) > self.cfg.radius_m:
+                continue
+            matcher = self._matcher(s, estimates, version, margin, self.grid_cfg.branch_levels)
+            predicted = between(estimates[s.anchor], current)
+            loop = self._match(matcher, self.points[k], predicted, drift(s.anchor, k, np.linalg.norm(predicted[:2])),
+                               s.anchor, k)
+            if loop is not None:
+                found.append(loop)
+        return found
+
+    def _match(self, matcher: BranchAndBound, points: ScanPoints, predicted: np.ndarray, drift: np.ndarray,
+               anchor: int, key: int) -> LoopClosure | None:
+        """A verified, weighted loop closure of the scan against a submap's matcher (anchor frame)."""
+        c, step = self.cfg, np.radians(self.front_cfg.angle_step_deg)
+        grid = matcher.grid
+        found = matcher.match(points.xy, points.normals, predicted, c.window_m, np.radians(c.window_deg), step,
+                              c.min_score)
+        if found.pose is None:
+            return None
+        # the response surface around the winner gives the covariance (Olson 2009 §IV)
+        local, pose = self._local_fit(grid, points, found.pose)
+        score_weight = smooth_step((local.score - c.min_score) / c.score_ramp)
+        chi2 = mahalanobis2(pose, predicted, drift + local.covariance)
+        weight = score_weight * smooth_step(2.0 * (c.gate_chi2 - chi2) / c.gate_chi2)
+        if weight <= 0.0:
+            return None
+        # the points that agree with the submap must fix every direction (Zhang et al. 2016)
+        if self.degeneracy.matched_weak(grid, pose, points.xy, points.normals, local.covariance) is not None:
+            return None
+        return LoopClosure(anchor, key, pose, local.covariance / weight, local.score, weight)
+
+    def _local_fit(self, grid: LikelihoodGrid, points: ScanPoints, start: np.ndarray):
+        f, step = self.front_cfg, np.radians(self.front_cfg.angle_step_deg)
+        local = correlative_match(grid, points.xy, points.normals, start, f.window_m, np.radians(f.window_deg), step)
+        return local, refine_pose(grid, points.xy, points.normals, local.pose, grid.resolution, step)
+
+    def relocalize(self, k: int, points: ScanPoints, estimates: dict[int, np.ndarray],
+                   version: int) -> LoopClosure | None:
+        """Scan k placed in the submap where it matches best, over every submap's whole extent and
+        every heading its normals suggest; None when no place holds it unambiguously (another
+        place in the world, not merely an overlapping submap, scoring within the margin)."""
+        c, f = self.cfg, self.front_cfg
+        margin = c.relocalize_margin_m + 3 * self.grid_cfg.sigma_m
+        offsets = window_angles(np.radians(f.rotation_window_deg), np.radians(f.angle_step_deg))
+        world, scores, sources = [], [], []
+        for s in self.submaps:
+            if k in s.keys:
+                continue
+            matcher = self._matcher(s, estimates, version, margin, c.relocalize_levels)
+            grid = matcher.grid
+            lo, hi = grid.origin, grid.origin + np.array(grid.values.shape) * grid.resolution
+            _, map_normals = fused_points(s.keys, estimates, {m: self.points[m].xy for m in s.keys},
+                                          {m: self.points[m].normals for m in s.keys}, estimates[s.anchor])
+            headings = merge_headings(rotation_candidates(points.normals, map_normals, np.radians(f.histogram_bin_deg),
+                                                          np.radians(f.histogram_smooth_deg), f.rotation_candidates),
+                                      np.radians(f.rotation_window_deg))
+            if len(headings) == 0:  # no normals to suggest a heading: every one
+                headings = np.arange(0.0, 2 * np.pi, 2 * np.radians(f.rotation_window_deg))
+            found = matcher.search(points.xy, points.normals, 0.5 * (lo + hi), (headings[:, None] + offsets).ravel(),
+                                   0.5 * float(np.max(hi - lo)), c.relocalize_min_score, 1.0 - f.ambiguity_margin)
+            if found.pose is None:
+                continue
+            poses, best = distinct(found.candidates, found.scores, f.distinct_m, np.radians(f.distinct_deg), 2)
+            world.append(compose(estimates[s.anchor], poses))
+            scores.append(best)
+            sources += [(matcher, s.anchor, p) for p in poses]
+        if not world:
+            return None
+        world, scores = np.concatenate(world), np.concatenate(scores)
+        order = np.argsort(-scores, kind="stable")
+        places, place_scores = distinct(world[order], scores[order], f.distinct_m, np.radians(f.distinct_deg), 2)
+        matcher, anchor, start = sources[order[0]]
+        local, pose = self._local_fit(matcher.grid, points, start)
+        # a rival place within the margin (a symmetric room) or a degenerate match places nothing
+        if len(places) > 1 and place_scores[1] >= (1.0 - f.ambiguity_margin) * place_scores[0]:
+            return None
+        if local.score < c.relocalize_min_score or self.degeneracy.matched_weak(
+                matcher.grid, pose, points.xy, points.normals, local.covariance) is not None:
+            return None
+        return LoopClosure(anchor, k, pose, local.covariance, local.score, 1.0, relocalization=True)

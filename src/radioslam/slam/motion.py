@@ -1,0 +1,95 @@
+"""The motion model (issue #12): where the terminal may be at the next scan, as hypotheses.
+
+A walker turns on the spot, repeats a turn or goes straight on, so no single prediction is
+the centre of the search: each hypothesis below seeds the front end's search (its heading
+is searched like a rotation candidate of the scan itself), and the front end picks by the
+scans. The primary hypothesis (external odometry where given, else constant velocity, else
+standing still) breaks ties between candidates the scans cannot tell apart, and is the pose
+of a scan that cannot be matched.
+
+Along a direction no wall fixes (a featureless corridor) the step is the walker's pace: the
+median length of the latest straight steps that observed every direction, along the
+predicted direction of travel. One step's speed is a poor guess for many steps.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+
+import numpy as np
+
+from radioslam.slam.se2 import between, compose
+
+
+class MotionHypothesis(str, Enum):
+    ODOMETRY = "odometry"  # the external odometry's step (wheels, IMU)
+    CONSTANT_VELOCITY = "constant-velocity"  # the last step repeated
+    STILL = "still"  # standing still
+    TURN_ON_THE_SPOT = "turn-on-the-spot"  # the last turn repeated without moving
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    kind: MotionHypothesis
+    pose: np.ndarray
+
+
+@dataclass
+class MotionModel:
+    """Built from the ``motion`` config section; ``odometry`` (P, 3) are external odometry poses
+    in their own frame (their steps are what counts), or None."""
+
+    pace_scans: int
+    straight_rad: float
+    odometry: np.ndarray | None = None
+    velocity: np.ndarray | None = None  # the last step, None before two poses or after a jump
+    speeds: list[float] = field(default_factory=list)  # lengths of observed straight steps
+
+    def odometry_step(self, k: int) -> np.ndarray | None:
+        """The external odometry's step from pose k − 1 to k, or None."""
+        if self.odometry is None or k < 1 or k >= len(self.odometry):
+            return None
+        return between(self.odometry[k - 1], self.odometry[k])
+
+    def hypotheses(self, k: int, last: np.ndarray) -> list[Hypothesis]:
+        """Where pose k may be, given pose k − 1 at ``last``; the primary hypothesis first."""
+        out = []
+        step = self.odometry_step(k)
+        if step is not None:
+            out.append(Hypothesis(MotionHypothesis.ODOMETRY, compose(last, step)))
+        if self.velocity is not None:
+            out.append(Hypothesis(MotionHypothesis.CONSTANT_VELOCITY, compose(last, self.velocity)))
+            turn = np.array([0.0, 0.0, self.velocity[2]])
+            out.append(Hypothesis(MotionHypothesis.TURN_ON_THE_SPOT, compose(last, turn)))
+        out.append(Hypothesis(MotionHypothesis.STILL, np.asarray(last, dtype=np.float64).copy()))
+        return out
+
+    def predict(self, k: int, last: np.ndarray) -> np.ndarray:
+        """The primary hypothesis' pose."""
+        return self.hypotheses(k, last)[0].pose
+
+    def paced(self, prediction: np.ndarray, last: np.ndarray) -> np.ndarray:
+        """``prediction`` moved along its own direction of travel so that the step is the pace,
+        when the predicted step goes straight; else unchanged (turning on the spot stays put)."""
+        straight = abs(between(last, prediction)[2]) < self.straight_rad
+        return pace_prediction(prediction, last, self.speeds if straight else [], self.pace_scans)
+
+    def update(self, step: np.ndarray | None, observed: bool) -> None:
+        """Record the step just made (None: a jump, e.g. a relocalization, leaves no velocity);
+        ``observed``: the scans fixed every direction of it, so it counts towards the pace."""
+        self.velocity = None if step is None else np.asarray(step, dtype=np.float64)
+        if step is not None and observed and abs(step[2]) < self.straight_rad:
+            self.speeds.append(float(np.linalg.norm(step[:2])))
+
+
+def pace_prediction(prediction: np.ndarray, last: np.ndarray, speeds: list[float], scans: int) -> np.ndarray:
+    """``prediction`` moved along its own direction of travel from ``last`` so that the step is
+    the median of the last ``scans`` observed step lengths ``speeds``: the walker's pace."""
+    travel = prediction[:2] - last[:2]
+    length = float(np.linalg.norm(travel))
+    if not speeds or length < 1e-9:
+        return prediction
+    paced = prediction.copy()
+    paced[:2] = last[:2] + travel * (float(np.median(speeds[-scans:])) / length)
+    return paced
