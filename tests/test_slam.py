@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from radioslam.sensing.pointcloud import Scan
-from radioslam.slam import RadioSlam, SlamConfig
+from radioslam.slam import RadioSlam, ScanStatus, SlamConfig
 from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.correlative import candidate_likelihoods, correlative_match
 from radioslam.slam.grid import LikelihoodGrid
@@ -108,13 +108,13 @@ def arc_scan(normal_deg: float, rng) -> Scan:
 
 @pytest.mark.parametrize("normal_deg", [-2.3, 0.0, 0.7, 3.1])
 def test_specular_normal_is_the_vertex_of_the_arc_power(normal_deg, rng):
-    normals = specular_normals(arc_scan(normal_deg, rng))
+    normals = specular_normals(arc_scan(normal_deg, rng), SlamConfig().scan.arc_range_m)
     assert np.allclose(np.degrees(normals), normal_deg, atol=1e-6)  # a parabola in dB is fitted exactly
 
 
 def test_points_of_a_run_without_interior_peak_have_no_normal(rng):
     scan = arc_scan(20.0, rng)  # the peak lies beyond the last beam
-    assert np.isnan(specular_normals(scan)).all()
+    assert np.isnan(specular_normals(scan, SlamConfig().scan.arc_range_m)).all()
 
 
 def synthetic_scans(poses, walls_pts, walls_nrm, rng, max_range=6.0):
@@ -135,7 +135,7 @@ def test_scan_with_too_few_points_is_skipped_and_the_trajectory_continues(rng):
     scans = synthetic_scans(poses, pts, nrm, rng)
     scans[4] = Scan.empty()
     result = RadioSlam(SlamConfig()).run(scans)
-    assert result.skipped.tolist() == [k == 4 for k in range(8)]
+    assert [s is ScanStatus.SKIPPED for s in result.status] == [k == 4 for k in range(8)]
     assert any("scan 4" in w and "skipped" in w for w in result.warnings)
     rel = between(result.poses[0], result.poses)
     truth = between(poses[0], poses)
@@ -144,7 +144,11 @@ def test_scan_with_too_few_points_is_skipped_and_the_trajectory_continues(rng):
 
 def test_weak_direction_is_the_one_no_surface_constrains(rng):
     """Zhang et al. 2016: J = Σ n nᵀ over the points' normals; its null space is unobserved."""
-    from radioslam.slam.degeneracy import line_normals, remap, weak_direction
+    from radioslam.slam.degeneracy import line_normals, remap
+    from radioslam.slam.degeneracy import weak_direction as weak_of
+
+    def weak_direction(xy, normals, heading, cov, ratio):
+        return weak_of(xy, normals, heading, cov, ratio, 0.5, 6)
 
     tight = np.diag([1e-4, 1e-4, 1e-6])
     xy = rng.normal(0, 3, (6, 2))
@@ -156,7 +160,7 @@ def test_weak_direction_is_the_one_no_surface_constrains(rng):
     assert abs(abs(weak @ [np.cos(0.3), np.sin(0.3)]) - 1) < 1e-9  # along the corridor, in the world frame
     # points without a specular normal lend the normal of the line through their neighbours
     wall = np.column_stack([np.linspace(0, 0.5, 6), np.linspace(0, 1, 6)])
-    assert np.allclose(np.tan(line_normals(wall) - np.pi / 2), 2.0)
+    assert np.allclose(np.tan(line_normals(wall, 0.5, 6) - np.pi / 2), 2.0)
     assert weak_direction(np.vstack([far, wall + [0, 5]]), np.concatenate([corridor, np.full(6, np.nan)]), 0.0,
                           tight, 4.0) is None  # a steep wall fixes the corridor's axis
     # the match's own covariance, elongated 10:1 along y, is the other trigger
@@ -182,8 +186,9 @@ def test_featureless_corridor_is_flagged_degenerate():
     receiver = Receiver(scene.radio, scene.radio.hardware_delay_s)
     scans = [receiver.sense(c).scan for c in Simulator.from_scene(scene).simulate(3)]
     result = RadioSlam(SlamConfig()).run(scans)
-    assert result.degenerate[1:].all()
-    flagged = [w for w in result.warnings if "degenerate" in w]
+    assert all(s is ScanStatus.DEGENERATE for s in result.status[1:])
+    flagged = [w for w in result.warnings if "degenerate match" in w]
+    assert "4 scan(s) degenerate: 1–4" in result.summary_lines()
     assert len(flagged) == 4 and all(w.endswith(("along 0° (predicted instead)", "along 180° (predicted instead)",
                                                    "along -180° (predicted instead)")) for w in flagged)
     # what the walls do fix stays right: the lateral position and the heading
@@ -193,7 +198,10 @@ def test_featureless_corridor_is_flagged_degenerate():
 def test_a_wall_the_map_lacks_fixes_nothing():
     """Only the points that agree with the map count towards the match's information: a
     wall seen for the first time cannot stop the match sliding along the one in common."""
-    from radioslam.slam.degeneracy import matched_weak_direction
+    from radioslam.slam.degeneracy import DegeneracyTest
+
+    def matched_weak_direction(grid, pose, scan, normals, cov, ratio):
+        return DegeneracyTest(ratio, 0.5, 6, 2.0).matched_weak(grid, pose, scan, normals, cov)
 
     along = np.column_stack([np.linspace(-3, 3, 61), np.full(61, 2.0)])  # a wall y = 2, normal −90°
     across = np.column_stack([np.full(41, 4.0), np.linspace(-2, 2, 41)])  # a wall x = 4, normal 180°
@@ -209,7 +217,7 @@ def test_a_wall_the_map_lacks_fixes_nothing():
 
 
 def test_pace_is_the_median_observed_step_along_the_predicted_travel():
-    from radioslam.slam.driver import pace_prediction
+    from radioslam.slam.motion import pace_prediction
 
     last, prediction = np.array([1.0, 1.0, 0.0]), np.array([1.0, 1.4, 0.05])
     paced = pace_prediction(prediction, last, [0.5, 0.6, 0.5, 9.0], 3)
@@ -220,7 +228,7 @@ def test_pace_is_the_median_observed_step_along_the_predicted_travel():
 
 def test_match_the_map_does_not_support_keeps_the_prediction(rng):
     """A scan whose points the local map cannot explain (a wholly new view) must not move
-    the pose: the match is flagged and the constant-velocity prediction kept."""
+    the pose: the scan is predicted (one alone is not a lost stretch) and the motion model's pose kept."""
     pts, nrm = room_points(rng, 600)
     poses = np.array([[-1.0 + 0.2 * k, 0.5, 0.0] for k in range(8)])
     scans = synthetic_scans(poses, pts, nrm, rng)
@@ -228,9 +236,9 @@ def test_match_the_map_does_not_support_keeps_the_prediction(rng):
     scans[4] = Scan(np.linalg.norm(elsewhere, axis=1), np.arctan2(elsewhere[:, 1], elsewhere[:, 0]),
                     np.zeros(60), np.zeros(60, np.int64), np.zeros(60, np.int64))
     result = RadioSlam(SlamConfig()).run(scans)
-    assert result.untrusted.tolist() == [k == 4 for k in range(8)]
-    assert result.match_score[4] < SlamConfig().min_match_score
-    assert any(w.startswith("scan 4: match score") and w.endswith("pose predicted instead") for w in result.warnings)
+    assert [s is ScanStatus.PREDICTED for s in result.status] == [k == 4 for k in range(8)]
+    assert result.match_score[4] < SlamConfig().front_end.min_match_score
+    assert any(w.startswith("scan 4: match score") for w in result.warnings)
+    assert not result.tracking_lost  # one predicted scan between matched ones is a new view
     rel = between(result.poses[0], result.poses)
     assert np.abs(rel[:, :2] - between(poses[0], poses)[:, :2]).max() < 0.05
-    assert not RadioSlam(SlamConfig(min_match_score=0.0)).run(scans).untrusted.any()

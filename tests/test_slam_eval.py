@@ -10,6 +10,7 @@ from radioslam.eval.map_metrics import map_coverage, map_error
 from radioslam.eval.trajectory_metrics import ate_rmse, rpe_rmse
 from radioslam.io import read_tum, write_tum
 from radioslam.io.ros_map import FREE, OCCUPIED, UNKNOWN, read_ros_map, write_ros_map
+from radioslam.slam.config import MapConfig
 from radioslam.slam.occupancy import occupancy_grid
 from radioslam.slam.se2 import compose
 
@@ -49,7 +50,7 @@ def test_map_metrics_of_points_on_and_off_a_wall():
 def test_occupancy_grid_round_trips_through_map_server_files(tmp_path):
     poses = np.zeros((5, 3))  # five looks: enough misses to call a cell free (p < 0.196)
     wall = np.column_stack([np.full(81, 3.0), np.linspace(-1, 1, 81)])
-    grid = occupancy_grid(poses, [wall] * 5, 0.05)
+    grid = occupancy_grid(poses, [wall] * 5, MapConfig())
     write_ros_map(tmp_path / "map.yaml", grid)
     cells, meta = read_ros_map(tmp_path / "map.yaml")
     assert meta["image"] == "map.pgm" and meta["resolution"] == 0.05 and meta["origin"][:2] == list(grid.origin)
@@ -140,13 +141,13 @@ def test_false_loop_closures_do_not_spoil_the_optimized_trajectory(two_laps, rob
         wrong = rng.uniform(-1, 1, 3) * [1.5, 1.5, np.radians(30.0)]
         return replace(loop, relative=compose(loop.relative, wrong))
 
-    cfg = SlamConfig(gnc=robust)
+    cfg = SlamConfig(pose_graph={"gnc": robust})
     clean = RadioSlam(cfg).run(scans)
     spoiled = RadioSlam(cfg, loop_hook=corrupt).run(scans)
     clean_ate, spoiled_ate = ate_rmse(clean.poses, truth), ate_rmse(spoiled.poses, truth)
-    print(f"gnc {robust}: {len(clean.loops)} loops, ATE {clean_ate:.3f} m; with {len(seen[::5])} of {len(seen)} "
-          f"wrong, {spoiled_ate:.3f} m")
-    assert clean_ate <= 0.10 and len(clean.loops) >= 20
+    print(f"gnc {robust}: {len(clean.loop_closures)} loops, ATE {clean_ate:.3f} m; "
+          f"with {len(seen[::5])} of {len(seen)} wrong, {spoiled_ate:.3f} m")
+    assert clean_ate <= 0.10 and len(clean.loop_closures) >= 20
     if robust:
         assert len(seen) >= 20 and spoiled_ate <= 1.5 * clean_ate
     else:

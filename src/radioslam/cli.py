@@ -208,16 +208,41 @@ def sense(
     err.print(f"wrote {len(files)} scans to {run.scans}", markup=False)
 
 
+CONFIG_HELP = "YAML config file; its slam: section sets the SLAM (see docs/architecture.md)"
+ODOMETRY_HELP = "relative motion from wheels or an IMU, one TUM pose per scan (its noise: slam.motion in --config)"
+STRICT_HELP = "exit with status 3 when tracking was lost (a stretch of scans matched nothing)"
+TRACKING_LOST = 3  # exit status of --strict when tracking was lost
+
+
+def _slam_config(path: Optional[Path]):
+    from radioslam.slam import SlamConfig, load_slam_config
+
+    return load_slam_config(path) if path is not None else SlamConfig()
+
+
+def _report_slam(result, strict: bool) -> None:
+    """The SLAM's summary lines as warnings; with --strict, tracking lost ends in exit status 3."""
+    for line in result.summary_lines():
+        err.print(f"radioslam: warning: {line}", markup=False, soft_wrap=True)
+    if strict and result.tracking_lost:
+        err.print("radioslam: error: tracking lost (--strict)", markup=False)
+        raise typer.Exit(TRACKING_LOST)
+
+
 @app.command()
 @one_line_errors
-def slam(run_dir: Path = typer.Argument(..., help="run directory with scans/ (from 'sense' or 'run')")) -> None:
-    """SLAM on the scans: trajectory.tum, trajectory_odometry.tum, map.pgm + map.yaml, map.ply."""
+def slam(
+    run_dir: Path = typer.Argument(..., help="run directory with scans/ (from 'sense' or 'run')"),
+    config: Optional[Path] = typer.Option(None, "--config", help=CONFIG_HELP),
+    odometry: Optional[Path] = typer.Option(None, "--odometry", help=ODOMETRY_HELP),
+    strict: bool = typer.Option(False, "--strict", help=STRICT_HELP),
+) -> None:
+    """SLAM on the scans: trajectory.tum, trajectory_odometry.tum, map.pgm + map.yaml, map.ply, slam.json."""
     from radioslam.pipeline import slam_stage
 
-    result = slam_stage(run_dir)
-    for line in result.warnings:
-        err.print(f"radioslam: warning: {line}", markup=False)
-    err.print(f"wrote {run_dir}: {len(result.poses)} poses, {len(result.loops)} loop closures", markup=False)
+    result = slam_stage(run_dir, _slam_config(config), odometry=odometry)
+    err.print(f"wrote {run_dir}: {len(result.poses)} poses, {len(result.loop_closures)} loop closures", markup=False)
+    _report_slam(result, strict)
 
 
 def _print_metrics(metrics: dict, json_out: bool) -> None:
@@ -243,21 +268,21 @@ def evaluate(
     _print_metrics(evaluate_stage(run_dir), json_out)
 
 
-def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out: bool) -> None:
+def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out: bool, config: Optional[Path] = None,
+             odometry: Optional[Path] = None, strict: bool = False) -> None:
     from radioslam.pipeline import run_scene
     from radioslam.scene import load_scene
     from radioslam.viz.report import write_report
 
+    cfg = _slam_config(config)
     poses = len(load_scene(scene).poses)
     with progress() as bar:
         task = bar.add_task("simulating and sensing", total=poses)
-        result, metrics = run_scene(scene, out, seed, snr_db, lambda: bar.advance(task))
-    for line in result.warnings:
-        err.print(f"radioslam: warning: {line}", markup=False)
-
+        result, metrics = run_scene(scene, out, seed, snr_db, lambda: bar.advance(task), cfg, odometry)
     write_report(out)
     _print_metrics(metrics, json_out)
     err.print(f"wrote {out} (report.html)", markup=False)
+    _report_slam(result, strict)
 
 
 @app.command()
@@ -268,9 +293,13 @@ def run(
     seed: int = typer.Option(0, "--seed", min=0),
     snr_db: Optional[float] = typer.Option(None, "--snr-db", help="per-RE SNR of the reference echo, dB"),
     json_out: bool = typer.Option(False, "--json", help="print one JSON object of the metrics on stdout"),
+    config: Optional[Path] = typer.Option(None, "--config", help=CONFIG_HELP),
+    odometry: Optional[Path] = typer.Option(None, "--odometry",
+                                            help=ODOMETRY_HELP + "; 'simulated': the scene's own (odometry.tum)"),
+    strict: bool = typer.Option(False, "--strict", help=STRICT_HELP),
 ) -> None:
     """simulate → sense → slam → evaluate on any scene, and write report.html."""
-    _run_all(scene, out, seed, snr_db, json_out)
+    _run_all(scene, out, seed, snr_db, json_out, config, odometry, strict)
 
 
 @app.command()
@@ -279,9 +308,10 @@ def demo(
     out: Path = typer.Option(Path("runs/demo"), "--out", help="run directory to write"),
     seed: int = typer.Option(1, "--seed", min=0),
     json_out: bool = typer.Option(False, "--json", help="print one JSON object of the metrics on stdout"),
+    strict: bool = typer.Option(False, "--strict", help=STRICT_HELP),
 ) -> None:
     """The paper's Fig. 6 simulation end to end: paper-cnv, 60 poses, SNR 10 dB, waveform IQ."""
-    _run_all("paper-cnv", out, seed, None, json_out)
+    _run_all("paper-cnv", out, seed, None, json_out, strict=strict)
 
 
 @app.command()

@@ -19,16 +19,19 @@ from radioslam.eval.trajectory_metrics import align, ate_rmse, rpe_rmse
 from radioslam.io import read_scan, read_tum, write_calibration, write_scan, write_tum
 from radioslam.io.atomic import atomic_write_text
 from radioslam.io.ply import read_map_points
-from radioslam.io.ros_map import write_ros_map
+from radioslam.io.ros_map import FREE, OCCUPIED, UNKNOWN, read_ros_map, write_ros_map
 from radioslam.io.rundir import RunDir
 from radioslam.scene import load_scene, scene_to_yaml
 from radioslam.sensing import Receiver, estimate_hardware_delay
 from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import Simulator
 from radioslam.sim.calibration_targets import calibration_ranges, simulate_calibration_captures
-from radioslam.slam import RadioSlam, SlamConfig, SlamResult
+from radioslam.sim.odometry import odometry_rng, simulated_odometry
+from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, SlamResult
 from radioslam.slam.occupancy import occupancy_grid
 from radioslam.slam.se2 import transform_points
+
+SIMULATED_ODOMETRY = "simulated"  # run --odometry simulated: the scene's own drifting odometry
 
 
 def calibrate_simulated(radio, out: Path, seed: int, targets: int | None = None, spacing: float | None = None):
@@ -52,6 +55,11 @@ def prepare_run(scene_name: str, out: Path, seed: int, snr_db: float | None):
     run.root.mkdir(parents=True, exist_ok=True)
     atomic_write_text(run.scene, scene_to_yaml(scene))
     write_tum(run.ground_truth, run.pose_timestamps(len(scene.poses)), scene.poses)
+    if scene.spec.odometry is not None:  # a drifting wheel/IMU odometry of the same walk
+        write_tum(run.odometry, run.pose_timestamps(len(scene.poses)),
+                  simulated_odometry(scene.poses, scene.spec.odometry, odometry_rng(seed)))
+    elif run.odometry.exists():
+        run.odometry.unlink()  # a run directory never mixes two runs
     return scene, run, calibrate_simulated(scene.radio, run.calibration, seed)
 
 
@@ -90,46 +98,87 @@ def read_scans(run: RunDir) -> list[Scan]:
     return [read_scan(f) for f in files]
 
 
-def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = None) -> SlamResult:
-    """Trajectories, maps and slam.json from scans/."""
+def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = None,
+               odometry: Path | None = None) -> SlamResult:
+    """Trajectories, maps and slam.json from scans/ (and an external odometry TUM file, if given)."""
     run = RunDir(out)
     scans = read_scans(run)
+    cfg = cfg or SlamConfig()
+    odometry_poses = read_odometry(odometry, len(scans)) if odometry is not None else None
     tick = time.perf_counter()
     try:
-        result = RadioSlam(cfg).run(scans)
+        result = RadioSlam(cfg).run(scans, odometry_poses)
     except RadioslamError as exc:  # the driver knows the field and reason, this stage the files
         raise RadioslamError(exc.reason, file=exc.file or run.scans, field=exc.field) from None
     slam_s = time.perf_counter() - tick
-    cfg = cfg or SlamConfig()
     stamps = run.pose_timestamps(len(scans))
     write_tum(run.trajectory, stamps, result.poses)
     write_tum(run.trajectory_odometry, stamps, result.odometry)
-    kept = [k for k in range(len(scans)) if not result.skipped[k]]
-    write_ros_map(run.map_yaml, occupancy_grid(result.poses[kept], [scans[k].xy for k in kept], cfg.resolution_m))
+    kept = [k for k, status in enumerate(result.status) if status is not ScanStatus.SKIPPED]
+    write_ros_map(run.map_yaml, occupancy_grid(result.poses[kept], [scans[k].xy for k in kept], cfg.map))
     fused = Scan(*(np.concatenate([getattr(scans[k], f) for k in kept]) if kept else np.zeros(0)
                    for f in ("range_m", "angle_rad", "power_db", "beam", "orientation")))
     world = np.concatenate([transform_points(result.poses[k], scans[k].xy) for k in kept]) if kept else np.zeros((0, 2))
     write_scan(run.map_cloud, fused, comment="fused map, world frame", xy=world)
     write_json(run.slam_summary, {
-        "loop_closures": [{"anchor": lc.anchor, "pose": lc.key, "score": lc.score} for lc in result.loops],
-        "skipped_scans": np.flatnonzero(result.skipped).tolist(),
+        "scan_status": [status.value for status in result.status],
+        "status_counts": status_counts(result.status),
+        "tracking_lost": result.tracking_lost,
+        "lost_scans": result.lost_scans,
+        "match_score": [None if np.isnan(v) else round(float(v), 4) for v in result.match_score],
+        "ms_per_scan": [round(float(v) * 1e3, 3) for v in result.seconds_per_scan],
+        "loop_closures": [{"anchor": lc.anchor, "pose": lc.key, "score": lc.score, "weight": lc.weight}
+                          for lc in result.loop_closures],
+        "relocalizations": [{"anchor": lc.anchor, "pose": lc.key, "score": lc.score}
+                            for lc in result.loops if lc.relocalization],
         "points_per_scan": [len(s) for s in scans],
-        "degenerate_scans": np.flatnonzero(result.degenerate).tolist(),
-        "untrusted_scans": np.flatnonzero(result.untrusted).tolist(),
+        "odometry": str(odometry) if odometry is not None else None,
         "warnings": result.warnings,
         "slam_ms_per_scan_median": float(np.median(result.seconds_per_scan) * 1e3),
         "timings_s": {**(timings or {}), "slam": slam_s},
-        "config": cfg.model_dump(),
+        "config": cfg.model_dump(mode="json"),
     })
     return result
 
 
-def run_scene(scene_name: str, out: Path, seed: int, snr_db: float | None,
-              advance=None) -> tuple[SlamResult, dict]:
+def status_counts(statuses: list[ScanStatus]) -> dict[str, int]:
+    """How many scans have each status (every status named, zeros included)."""
+    return {s.value: sum(x is s for x in statuses) for s in ScanStatus}
+
+
+def read_odometry(path: Path, scans: int) -> np.ndarray:
+    """External odometry poses (P, 3) from a TUM file, one per scan in pose order."""
+    _, poses = read_tum(path)
+    if len(poses) != scans:
+        raise RadioslamError(f"{len(poses)} odometry poses for {scans} scans (one per scan)", file=path,
+                             field="(poses)")
+    return poses
+
+
+def run_scene(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None,
+              cfg: SlamConfig | None = None, odometry: Path | None = None) -> tuple[SlamResult, dict]:
     """Simulate and sense, SLAM, evaluate: a whole run directory; the SLAM result and metrics."""
     timings = simulate_and_sense(scene_name, out, seed, snr_db, advance)
-    result = slam_stage(out, timings=timings)
+    if odometry is not None and str(odometry) == SIMULATED_ODOMETRY:
+        odometry = RunDir(out).odometry
+        if not odometry.exists():
+            raise RadioslamError("the scene has no odometry: block to simulate one from", file=scene_name,
+                                 field="odometry")
+    result = slam_stage(out, cfg, timings, odometry)
     return result, evaluate_stage(out)
+
+
+def map_point_cells(run: RunDir, cloud: np.ndarray) -> dict:
+    """The fractions of map.ply's points that lie on occupied and on free cells of map.pgm (what
+    the grid keeps of what the points show, issue #12 point 8)."""
+    if not run.map_yaml.exists() or not len(cloud):
+        return {}
+    cells, meta = read_ros_map(run.map_yaml)
+    index = np.floor((cloud - np.array(meta["origin"][:2])) / meta["resolution"]).astype(int)
+    inside = np.all((index >= 0) & (index < cells.shape), axis=1)
+    value = np.full(len(cloud), UNKNOWN)
+    value[inside] = cells[index[inside, 0], index[inside, 1]]
+    return {"map_points_occupied": float(np.mean(value == OCCUPIED)), "map_points_free": float(np.mean(value == FREE))}
 
 
 def evaluate_stage(out: Path) -> dict:
@@ -145,7 +194,8 @@ def evaluate_stage(out: Path) -> dict:
     scene = load_scene(str(run.scene))
     summary = json.loads(run.slam_summary.read_text(encoding="utf-8")) if run.slam_summary.exists() else {}
     _, transform = align(estimate, truth)
-    points = transform_points(transform, read_map_points(run.map_cloud))
+    cloud = read_map_points(run.map_cloud)
+    points = transform_points(transform, cloud)
     counts = summary.get("points_per_scan", [])
     metrics = {
         "ate_rmse_m": ate_rmse(estimate, truth),
@@ -153,12 +203,13 @@ def evaluate_stage(out: Path) -> dict:
         "rpe_rmse_m": rpe_rmse(estimate, truth),
         "map_error_m": map_error(points, scene.segments),
         "map_coverage": map_coverage(points, scene.segments),
+        **map_point_cells(run, cloud),
         "loop_closures": len(summary.get("loop_closures", [])),
         "poses": len(truth),
         "points_per_scan": float(np.mean(counts)) if counts else 0.0,
-        "skipped_scans": len(summary.get("skipped_scans", [])),
-        "degenerate_scans": len(summary.get("degenerate_scans", [])),
-        "untrusted_scans": len(summary.get("untrusted_scans", [])),
+        "tracking_lost": bool(summary.get("tracking_lost", False)),
+        "status_counts": summary.get("status_counts", {}),
+        "lost_scans": summary.get("lost_scans", []),
         "slam_ms_per_scan": summary.get("slam_ms_per_scan_median"),
         "timings_s": {**summary.get("timings_s", {}), "evaluate": time.perf_counter() - tick},
     }

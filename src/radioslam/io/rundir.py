@@ -37,6 +37,11 @@ class RunDir:
         return self.captures / f"{pose_index:04d}"
 
     @property
+    def odometry(self) -> Path:
+        """The simulated drifting odometry (scenes with an ``odometry:`` block)."""
+        return self.root / "odometry.tum"
+
+    @property
     def calibration(self) -> Path:
         return self.root / "calibration.json"
 

@@ -70,6 +70,17 @@ class TrajectorySpec(_Strict):
         return self
 
 
+class OdometrySpec(_Strict):
+    """A drifting wheel/IMU odometry the simulator writes as ``odometry.tum`` (issue #12): each
+    step's true motion, scaled by 1 + ``scale_bias``, its heading change plus ``heading_bias_deg``,
+    and white noise of ``sigma_m`` (each axis of the step, terminal frame) and ``sigma_deg``."""
+
+    sigma_m: float = Field(0.02, ge=0.0, le=10.0)
+    sigma_deg: float = Field(0.5, ge=0.0, le=180.0)
+    scale_bias: float = Field(0.0, ge=-0.5, le=0.5)
+    heading_bias_deg: float = Field(0.0, ge=-30.0, le=30.0)
+
+
 class SceneSpec(_Strict):
     version: Literal[1]
     name: str = Field(min_length=1)
@@ -77,3 +88,4 @@ class SceneSpec(_Strict):
     walls: list[WallSpec] = Field(min_length=1)
     trajectory: TrajectorySpec
     radio: RadioConfig = Field(default_factory=RadioConfig)
+    odometry: OdometrySpec | None = None  # optional: the simulator also writes a drifting odometry

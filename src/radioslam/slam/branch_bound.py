@@ -35,8 +35,9 @@ class BranchBoundResult:
     score: float
     evaluated: int  # candidate nodes scored (against the exhaustive search's count)
     exhaustive: int
-    candidates: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (C, 3) leaves within keep_ratio of the best, best first
-    scores: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (C,)
+    # (C, 3) leaves within keep_ratio of the best, best first, and their scores
+    candidates: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    scores: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def window_angles(window_rad: float, step: float) -> np.ndarray:

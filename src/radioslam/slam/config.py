@@ -28,6 +28,12 @@ class GridConfig(_Section):
     normal_sigma_deg: float = Field(1.0, gt=0)
     # points with a normal are scored point-to-plane within this distance of the nearest map point
     plane_reach_m: float = Field(1.5, ge=0)
+    # negative evidence (:mod:`radioslam.slam.free_space`): a point on a cell the map's scans saw
+    # through (each arc's normal line up to free_stop_m short of its foot, a disc around each pose)
+    # scores −free_penalty instead of 0
+    free_penalty: float = Field(1.0, ge=0)
+    free_stop_m: float = Field(0.3, ge=0)
+    free_pose_radius_m: float = Field(0.5, ge=0)
     # max-pooled pyramid levels of branch and bound: the coarsest cell is 2^levels cells wide
     branch_levels: int = Field(4, ge=1, le=8)
 
@@ -63,7 +69,10 @@ class FrontEndConfig(_Section):
     rotation_window_deg: float = Field(3.0, gt=0)  # searched around each candidate and hypothesis
     # a candidate's score is discounted by this fraction times its turn from the nearest motion
     # hypothesis' heading in half turns (a 180° surprise loses it all): the motion prior
-    motion_prior: float = Field(0.15, ge=0, lt=1)
+    motion_prior: float = Field(0.25, ge=0, lt=1)
+    # and, once a step is predicted, by this fraction times its distance from the predicted position
+    # per max_step_m (capped at 1)
+    translation_prior: float = Field(0.2, ge=0, lt=1)
     # two distinct candidates whose discounted scores differ by less than this fraction are ambiguous
     ambiguity_margin: float = Field(0.08, ge=0, lt=1)
     # candidates nearer than this in position and heading are one hypothesis (non-maximum suppression)
@@ -118,7 +127,9 @@ class LoopClosureConfig(_Section):
     # smoothly to 0 as its χ² approaches the gate (no cliff where a loop is accepted)
     score_ramp: float = Field(0.10, gt=0)
     gate_chi2: float = Field(16.27, gt=0)  # χ²(3) at 99.9 %: consistency with the graph
-    # relocalization after a lost scan: every submap, full rotation, translation over its extent
+    # relocalization once this many consecutive scans matched nothing (one alone is a new view, such
+    # as a cross aisle, and keeps the prediction): every submap, full rotation, translation over its extent
+    relocalize_after: int = Field(2, ge=1)
     relocalize_min_score: float = Field(0.35, ge=0, le=1)
     relocalize_margin_m: float = Field(2.0, ge=0)  # beyond the submap's points
     relocalize_levels: int = Field(6, ge=1, le=10)  # branch-and-bound levels for a search that wide

@@ -52,6 +52,12 @@ def candidate_likelihoods(grid: LikelihoodGrid, points: np.ndarray, normals: np.
     return grid.likelihood_at(x, y, ~np.isnan(normals), world_normal)
 
 
+def point_log_likelihood(like: np.ndarray) -> np.ndarray:
+    """log max(L, L_floor) per point; a point on known free space (L < 0) scores the floor times
+    e^(−4.5) again: contradicted, not merely unexplained."""
+    return np.where(like < 0, 2 * np.log(LIKELIHOOD_FLOOR), np.log(np.maximum(like, LIKELIHOOD_FLOOR)))
+
+
 def correlative_match(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, prediction: np.ndarray,
                       window_m: float, window_rad: float, angle_step: float) -> Match:
     """Best pose of ``points`` (P, 2) with specular ``normals`` (P,) in ``grid`` within ±window of
@@ -61,7 +67,7 @@ def correlative_match(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndar
     reach = int(np.ceil(window_m / grid.resolution))
     offsets = np.arange(-reach, reach + 1)
     like = candidate_likelihoods(grid, points, normals, prediction, angles, offsets)
-    loglik = np.log(np.maximum(like, LIKELIHOOD_FLOOR)).sum(axis=-1)  # (A, X, Y)
+    loglik = point_log_likelihood(like).sum(axis=-1)  # (A, X, Y)
     a, i, j = np.unravel_index(np.argmax(loglik), loglik.shape)
     best = prediction + np.array([offsets[i] * grid.resolution, offsets[j] * grid.resolution, angles[a]])
     # Olson §IV: the candidates' likelihoods as a posterior → mean and covariance

@@ -37,15 +37,31 @@ class SlamResult:
     def scans_with(self, status: ScanStatus) -> list[int]:
         return [k for k, s in enumerate(self.status) if s is status]
 
+    lost_after: int = 2  # this many consecutive predicted scans are a lost stretch
+
     @property
     def lost_scans(self) -> list[int]:
-        """Scans whose pose rests on the motion model alone."""
-        return [k for k, s in enumerate(self.status) if s.lost]
+        """Scans of the stretches of at least ``lost_after`` consecutive scans whose poses rest on
+        the motion model alone (one predicted scan between matched ones is a new view, not lost)."""
+        lost = np.array([s.lost for s in self.status] + [False])
+        edges = np.flatnonzero(np.diff(np.concatenate([[0], lost.astype(int)])))
+        runs = edges.reshape(-1, 2) if len(edges) % 2 == 0 else np.zeros((0, 2), int)
+        return [k for a, b in runs if b - a >= self.lost_after for k in range(a, b)]
 
     @property
     def tracking_lost(self) -> bool:
-        """★ ``metrics.json``: the run has lost or predicted stretches."""
+        """★ ``metrics.json``: the run has lost stretches."""
         return bool(self.lost_scans)
+
+    def summary_lines(self) -> list[str]:
+        """What a user must know, one line each: every status other than matched with its scans,
+        and last, if tracking was lost, the lost stretches."""
+        lines = [f"{len(keys)} scan(s) {status.value}: {scan_ranges(keys)}" for status in ScanStatus
+                 if status is not ScanStatus.MATCHED and (keys := self.scans_with(status))]
+        if self.tracking_lost:
+            lines.append(f"tracking lost: scans {scan_ranges(self.lost_scans)} matched nothing and were not "
+                         "relocalized; their poses are the motion model's")
+        return lines
 
     @property
     def loop_closures(self) -> list[LoopClosure]:
@@ -71,16 +87,17 @@ class RadioSlam:
         front_end, loop_closer, back_end = FrontEnd.from_config(cfg, odometry), LoopCloser.from_config(cfg), \
             BackEnd.from_config(cfg)
         steps: list[Step] = []
-        seconds = []
+        seconds, lost = [], 0  # lost: consecutive scans nothing matched
         for k, scan in enumerate(scans):
             tick = time.perf_counter()
             # 1. the scan's points and the specular normal of the wall each came from
             points = prepare_points(scan, cfg.scan)
             # 2. register it against the local map: the motion's hypotheses and the scan's own rotation candidates
             step = front_end.register(k, points, back_end.estimates)
-            # 3. a lost scan is relocalized against every submap, or keeps the motion model's pose
+            # 3. a scan lost after others is relocalized against every submap, or keeps the motion model's pose
+            lost = lost + 1 if step.status is ScanStatus.PREDICTED else 0
             found = loop_closer.relocalize(k, points, back_end.estimates, back_end.version) \
-                if step.status is ScanStatus.PREDICTED and loop_closer.submaps else None
+                if lost >= cfg.loop_closure.relocalize_after and loop_closer.submaps else None
             if found is not None:
                 step = front_end.relocalized(back_end.relocalized_pose(found), found.score)
             # 4. the pose and the factors tying it to the previous one into the pose graph
@@ -97,19 +114,16 @@ class RadioSlam:
             steps.append(step)
             seconds.append(time.perf_counter() - tick)
         back_end.finish()
-        return self._result(steps, back_end, seconds)
+        return self._result(steps, back_end, seconds, cfg.loop_closure.relocalize_after)
 
     @staticmethod
-    def _result(steps: list[Step], back_end: BackEnd, seconds: list[float]) -> SlamResult:
+    def _result(steps: list[Step], back_end: BackEnd, seconds: list[float], lost_after: int) -> SlamResult:
         n = len(steps)
         result = SlamResult(poses=np.array([back_end.estimates[k] for k in range(n)]),
                             odometry=np.array([back_end.chain[k] for k in range(n)]),
                             status=[s.status for s in steps], match_score=np.array([s.score for s in steps]),
-                            loops=back_end.loops, seconds_per_scan=np.array(seconds))
-        result.warnings = [f"scan {k}: {s.note}" for k, s in enumerate(steps) if s.note]
-        if result.tracking_lost:
-            result.warnings.append(f"tracking lost: scans {scan_ranges(result.lost_scans)} matched nothing and "
-                                   "were not relocalized; their poses are the motion model's")
+                            loops=back_end.loops, seconds_per_scan=np.array(seconds), lost_after=lost_after)
+        result.warnings = [f"scan {k}: {s.note}" for k, s in enumerate(steps) if s.note] + result.summary_lines()
         return result
 
 

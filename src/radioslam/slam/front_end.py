@@ -26,12 +26,13 @@ from radioslam.slam.branch_bound import BranchAndBound, distinct, window_angles
 from radioslam.slam.config import FrontEndConfig, GridConfig, MotionConfig, ScanConfig
 from radioslam.slam.correlative import correlative_match
 from radioslam.slam.degeneracy import DegeneracyTest, remap
+from radioslam.slam.free_space import free_samples
 from radioslam.slam.grid import LikelihoodGrid
-from radioslam.slam.motion import MotionModel
+from radioslam.slam.motion import Hypothesis, MotionHypothesis, MotionModel
 from radioslam.slam.normals import specular_normals, wall_points
 from radioslam.slam.refine import refine_pose
 from radioslam.slam.rotation_search import merge_headings, rotation_candidates
-from radioslam.slam.se2 import between, wrap_angle
+from radioslam.slam.se2 import between, transform_points, wrap_angle
 from radioslam.slam.status import ScanStatus
 from radioslam.slam.submap import fused_points
 
@@ -89,9 +90,11 @@ class FrontEnd:
                                          scan.inlier_sigmas)
         self.step_rad = np.radians(cfg.angle_step_deg)
         self.floor = np.diag([cfg.floor_sigma_m**2] * 2 + [np.radians(cfg.floor_sigma_deg) ** 2])
-        self.predicted = np.diag([motion_cfg.predicted_sigma_m**2] * 2 + [np.radians(motion_cfg.predicted_sigma_deg)**2])
+        m = motion_cfg
+        self.predicted = np.diag([m.predicted_sigma_m**2] * 2 + [np.radians(m.predicted_sigma_deg) ** 2])
         self.keys: list[int] = []  # scans of the local map, oldest first
         self.points: dict[int, ScanPoints] = {}
+        self.free: dict[int, np.ndarray] = {}  # terminal-frame free-space samples of each scan
 
     @classmethod
     def from_config(cls, cfg, odometry: np.ndarray | None = None) -> "FrontEnd":
@@ -127,13 +130,12 @@ class FrontEnd:
             return Step(primary, self.predicted, ScanStatus.PREDICTED, 0.0, note="nothing in the local map matches")
         candidates, scores = distinct(found.candidates, found.scores, cfg.distinct_m, np.radians(cfg.distinct_deg),
                                       cfg.rotation_candidates)
-        # the scores discounted by the turn from the nearest motion hypothesis' heading: a prior, not a
-        # window (every translation within a step is as likely)
-        turn = np.min(np.abs(wrap_angle(candidates[:, 2][:, None] - [h.pose[2] for h in hypotheses])), axis=1)
-        adjusted = scores * (1.0 - cfg.motion_prior * turn / np.pi)
-        chosen = int(np.argmax(adjusted))
-        rivals = np.delete(candidates, chosen, axis=0)[np.delete(adjusted, chosen) >=
-                                                       (1.0 - cfg.ambiguity_margin) * adjusted[chosen]]
+        discount = self._prior_discount(candidates, hypotheses)
+        adjusted = scores * (1.0 - discount)
+        # the scans cannot tell apart what scores within the margin of the best: there the motion decides
+        close = np.flatnonzero(adjusted >= (1.0 - cfg.ambiguity_margin) * adjusted.max())
+        chosen = int(close[np.argmin(discount[close])])
+        rivals = candidates[np.setdiff1d(close, [chosen])]
         match = correlative_match(grid, xy, phi, candidates[chosen], cfg.window_m, np.radians(cfg.window_deg),
                                   self.step_rad)
         pose = refine_pose(grid, xy, phi, match.pose, self.grid_cfg.resolution_m, self.step_rad)
@@ -165,6 +167,19 @@ class FrontEnd:
             pose, cov = fuse(pose, cov, weight, primary, self.predicted)
         return Step(pose, cov, status, match.score, rivals, note)
 
+    def _prior_discount(self, candidates: np.ndarray, hypotheses: list[Hypothesis]) -> np.ndarray:
+        """The motion prior as a fraction (C,) of each candidate's score: ``motion_prior`` times its
+        turn from the nearest hypothesis' heading in half turns, plus, once the motion is known,
+        ``translation_prior`` times its distance from the primary hypothesis per ``max_step_m``."""
+        cfg = self.cfg
+        turn = np.min(np.abs(wrap_angle(candidates[:, 2][:, None] - [h.pose[2] for h in hypotheses])), axis=1)
+        discount = cfg.motion_prior * turn / np.pi
+        primary = hypotheses[0]
+        if primary.kind is not MotionHypothesis.STILL:  # a step is predicted: deviations from it cost
+            shift = np.linalg.norm(candidates[:, :2] - primary.pose[:2], axis=1) / self.motion_cfg.max_step_m
+            discount = discount + cfg.translation_prior * np.minimum(shift, 1.0)
+        return discount
+
     def _local_grid(self, estimates: dict[int, np.ndarray]) -> tuple[LikelihoodGrid, np.ndarray]:
         """The likelihood field of the local map's scans at their latest poses (world frame), and the
         map points' world normals."""
@@ -173,8 +188,9 @@ class FrontEnd:
                                    {m: self.points[m].normals for m in keys}, np.zeros(3))
         g = self.grid_cfg
         margin = self.motion_cfg.max_step_m + self.cfg.window_m + 3 * g.sigma_m
-        grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, normals, np.radians(g.normal_sigma_deg),
-                                          g.plane_reach_m)
+        free = np.concatenate([transform_points(estimates[m], self.free[m]) for m in keys])
+        grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, normals,
+                                          np.radians(g.normal_sigma_deg), g.plane_reach_m, free, g.free_penalty)
         return grid, normals
 
     def local_map_keys(self, estimates: dict[int, np.ndarray]) -> list[int]:
@@ -195,6 +211,9 @@ class FrontEnd:
         if step.status is not ScanStatus.SKIPPED:
             self.keys.append(k)
             self.points[k] = points
+            g = self.grid_cfg
+            self.free[k] = free_samples(points.xy, points.normals, g.free_stop_m, g.free_pose_radius_m,
+                                        g.resolution_m / 2)
         jumped = previous is None or step.status is ScanStatus.RELOCALIZED
         self.motion.update(None if jumped else between(previous, step.pose),
                            observed=step.status is ScanStatus.MATCHED)

@@ -43,7 +43,7 @@ def normal_likelihood(map_normal: np.ndarray, point_normal: np.ndarray, sigma: f
 
 @dataclass(frozen=True)
 class LikelihoodGrid:
-    values: np.ndarray  # (NX, NY) in [0, 1]
+    values: np.ndarray  # (NX, NY) in [0, 1], or −penalty on known free space
     origin: np.ndarray  # (2,) world position of cell (0, 0)'s lower-left corner
     resolution: float
     normals: np.ndarray  # (NX, NY) world normal of the nearest map point, NaN: unknown
@@ -62,8 +62,11 @@ class LikelihoodGrid:
     @classmethod
     def from_points(cls, points: np.ndarray, resolution: float, sigma: float, margin: float,
                     normals: np.ndarray | None = None, normal_sigma: float = np.inf,
-                    plane_reach: float = 0.0) -> "LikelihoodGrid":
-        """The field of map points (P, 2) with their world normals (P,), ``margin`` beyond them."""
+                    plane_reach: float = 0.0, free: np.ndarray | None = None,
+                    free_penalty: float = 0.0) -> "LikelihoodGrid":
+        """The field of map points (P, 2) with their world normals (P,), ``margin`` beyond them;
+        cells holding a ``free`` sample (F, 2) (:mod:`radioslam.slam.free_space`) and farther than
+        3σ from every map point score −``free_penalty``: a point there contradicts the map."""
         if len(points) == 0:
             raise SlamError("cannot build a likelihood grid from no points", field="points")
         origin = points.min(axis=0) - margin
@@ -84,7 +87,15 @@ class LikelihoodGrid:
         normal = cell_normal[hx, hy]
         along = np.abs(np.cos(normal) * (near[0] - hx) + np.sin(normal) * (near[1] - hy)) * resolution
         plane[near] = np.where(np.isnan(normal), plane[near], along)
-        return cls(_gaussian(d, sigma), origin, resolution, cell_normal[ix, iy], normal_sigma, _gaussian(plane, sigma))
+        values, plane = _gaussian(d, sigma), _gaussian(plane, sigma)
+        if free is not None and len(free) and free_penalty > 0:
+            c = np.floor((free - origin) / resolution).astype(np.int64)
+            c = c[np.all((c >= 0) & (c < shape), axis=1)]
+            contradicted = np.zeros(shape, dtype=bool)
+            contradicted[c[:, 0], c[:, 1]] = True
+            contradicted &= d > 3 * sigma
+            values[contradicted] = plane[contradicted] = -free_penalty
+        return cls(values, origin, resolution, cell_normal[ix, iy], normal_sigma, plane)
 
     def cells(self, points: np.ndarray) -> np.ndarray:
         """Integer cells (..., 2) of points (..., 2), clipped to the grid."""
@@ -103,8 +114,9 @@ class LikelihoodGrid:
         inside = (x >= 0) & (x < nx) & (y >= 0) & (y < ny)
         x, y = np.clip(x, 0, nx - 1), np.clip(y, 0, ny - 1)
         like = np.where(inside, fields[np.asarray(on_plane, dtype=np.int64), x, y], 0.0)
-        if world_normal is not None:
-            like = like * normal_likelihood(self.normals[x, y], world_normal, self.normal_sigma)
+        if world_normal is not None:  # free space (negative) contradicts whatever the normal
+            agree = normal_likelihood(self.normals[x, y], world_normal, self.normal_sigma)
+            like = np.where(like > 0, like * agree, like)
         return like
 
     def normal_at(self, points: np.ndarray) -> np.ndarray:

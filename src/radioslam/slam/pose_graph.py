@@ -40,7 +40,8 @@ class PoseGraph:
             self.initial.insert(key, _pose2(pose))
         if self.graph.size() == 0:
             self.inliers.append(self.graph.size())
-            self.graph.add(gtsam.PriorFactorPose2(key, _pose2(pose), gtsam.noiseModel.Diagonal.Sigmas(self.prior_sigmas)))
+            prior = gtsam.noiseModel.Diagonal.Sigmas(self.prior_sigmas)
+            self.graph.add(gtsam.PriorFactorPose2(key, _pose2(pose), prior))
 
     def _between(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray) -> None:
         noise = gtsam.noiseModel.Gaussian.Covariance(np.asarray(covariance, dtype=np.float64))

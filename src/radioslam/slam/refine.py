@@ -26,7 +26,7 @@ def refine_pose(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, s
         value, grad = grid.interpolate(placed, known)
         delta = np.where(known, wrap_angle(pose[2] + np.nan_to_num(normals) - grid.normal_at(placed)), 0.0)
         delta = np.nan_to_num(delta)  # no map normal there
-        agree = np.exp(-0.5 * (delta / sigma) ** 2)
+        agree = np.where(value > 0, np.exp(-0.5 * (delta / sigma) ** 2), 1.0)  # free space: no normal
         return value, grad, delta, agree
 
     def residuals(pose):
