@@ -20,12 +20,13 @@ compares.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from radioslam.slam.correlative import heading_cells
-from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.grid import LikelihoodGrid, phasors
 from radioslam.slam.se2 import wrap_angle
 
 
@@ -54,10 +55,11 @@ class BranchAndBound:
         self.pyramid = grid.pyramid(levels)
 
     def _scores(self, cells, normals, theta, nodes, level):
-        """Mean bound (N,) of nodes (angle index, ox, oy) at ``level``; exact with normals at 0."""
+        """Mean bound (N,) of nodes (angle index, ox, oy) at ``level``; exact with normals at 0.
+        ``theta`` holds the world-normal phasors (A, P) of the points at each heading."""
         a, ox, oy = nodes[:, 0], nodes[:, 1], nodes[:, 2]
         x, y = cells[a, :, 0] + ox[:, None], cells[a, :, 1] + oy[:, None]  # (N, P)
-        world_normal = theta[a][:, None] + normals[None, :] if level == 0 else None
+        world_normal = theta[a] if level == 0 else None
         return self.grid.likelihood_at(x, y, ~np.isnan(normals), world_normal, self.pyramid[level]).mean(axis=1)
 
     def _children(self, nodes, level, reach):
@@ -73,24 +75,36 @@ class BranchAndBound:
         return self.search(points, normals, prediction[:2], headings, window_m, min_score)
 
     def search(self, points: np.ndarray, normals: np.ndarray, centre: np.ndarray, headings: np.ndarray,
-               window_m: float, min_score: float, keep_ratio: float = 1.0) -> BranchBoundResult:
+               window_m: float, min_score: float, keep_ratio: float = 1.0,
+               discount: Callable[[np.ndarray], np.ndarray] | None = None) -> BranchBoundResult:
         """Poses (x, y) within ±window_m of ``centre`` at each of ``headings`` (A,): the best, and
-        every leaf scoring at least ``keep_ratio`` times the best."""
+        every leaf scoring at least ``keep_ratio`` times the best. With a prior ``discount`` (a
+        fraction of the score per pose (C, 3)), the best is the best discounted score, and every
+        leaf whose own score reaches ``keep_ratio`` times it is kept (the candidates a decision
+        on discounted scores can pick, and no more)."""
         res = self.grid.resolution
         reach = int(np.ceil(window_m / res))
         centre = np.array([centre[0], centre[1], 0.0])
         cells = heading_cells(self.grid, points, centre[:2], headings)
+        theta = phasors(headings[:, None] + normals[None, :])  # (A, P) world normals, once per heading
         top = 2**self.levels
         starts = np.arange(-reach, reach + 1, top)
         ga, gx, gy = np.meshgrid(np.arange(len(headings)), starts, starts, indexing="ij")
         nodes = np.stack([ga.ravel(), gx.ravel(), gy.ravel()], axis=1)
         exhaustive = len(headings) * (2 * reach + 1) ** 2
+        res_pose = np.array([res, res, 1.0])
+
+        def pose_of(node):
+            return np.array([centre[0], centre[1], 0.0]) + res_pose * [node[1], node[2], 0.0] + [0, 0, headings[node[0]]]
+
         threshold, evaluated = min_score, 0
         for level in range(self.levels, -1, -1):
-            bound = self._scores(cells, normals, headings, nodes, level)
+            bound = self._scores(cells, normals, theta, nodes, level)
             evaluated += len(nodes)
             if level > 0:
-                greedy = self._greedy(cells, normals, headings, nodes[np.argmax(bound)], level, reach)
+                leaf, greedy = self._greedy(cells, normals, theta, nodes[np.argmax(bound)], level, reach)
+                if discount is not None and leaf is not None:
+                    greedy *= 1.0 - float(discount(pose_of(leaf)[None])[0])
                 threshold = max(threshold, keep_ratio * greedy)
             kept = bound >= threshold
             nodes, bound = nodes[kept], bound[kept]
@@ -98,21 +112,23 @@ class BranchAndBound:
                 return BranchBoundResult(None, 0.0, evaluated, exhaustive)
             if level > 0:
                 nodes = self._children(nodes, level, reach)
-        order = np.argsort(-bound, kind="stable")
-        order = order[bound[order] >= keep_ratio * bound[order[0]]]
-        a, ox, oy = nodes[order, 0], nodes[order, 1], nodes[order, 2]
+        a, ox, oy = nodes[:, 0], nodes[:, 1], nodes[:, 2]
         poses = np.stack([centre[0] + ox * res, centre[1] + oy * res, wrap_angle(headings[a])], axis=1)
-        return BranchBoundResult(poses[0], float(bound[order[0]]), evaluated, exhaustive, poses, bound[order])
+        judged = bound if discount is None else bound * (1.0 - discount(poses))
+        order = np.argsort(-judged, kind="stable")
+        order = order[bound[order] >= keep_ratio * judged[order[0]]]
+        return BranchBoundResult(poses[order[0]], float(bound[order[0]]), evaluated, exhaustive, poses[order],
+                                 bound[order])
 
-    def _greedy(self, cells, normals, theta, node, level, reach) -> float:
-        """Score of the leaf reached by always taking the best child: a reachable lower bound."""
+    def _greedy(self, cells, normals, theta, node, level, reach) -> tuple[np.ndarray | None, float]:
+        """The leaf reached by always taking the best child, and its score: a reachable lower bound."""
         nodes = node[None]
         for h in range(level, 0, -1):
             nodes = self._children(nodes, h, reach)
             if len(nodes) == 0:
-                return 0.0
+                return None, 0.0
             nodes = nodes[[np.argmax(self._scores(cells, normals, theta, nodes, h - 1))]]
-        return float(self._scores(cells, normals, theta, nodes, 0)[0])
+        return nodes[0], float(self._scores(cells, normals, theta, nodes, 0)[0])
 
 
 def distinct(poses: np.ndarray, scores: np.ndarray, radius_m: float, radius_rad: float,

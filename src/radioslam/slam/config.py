@@ -58,15 +58,16 @@ class FrontEndConfig(_Section):
     # and against up to this many older scans taken within nearby_radius_m of the last pose
     nearby_scans: int = Field(20, ge=0)
     nearby_radius_m: float = Field(3.0, ge=0)
-    # the response surface (covariance, Olson 2009 §IV) and the final search: ±window around the winner
-    window_m: float = Field(0.30, gt=0)
-    window_deg: float = Field(6.0, gt=0)
+    # the response surface (covariance, Olson 2009 §IV) and the final search: ±window around the
+    # winner of the wide search (loop closures use twice this window: their winner is coarser)
+    window_m: float = Field(0.15, gt=0)
+    window_deg: float = Field(3.0, gt=0)
     angle_step_deg: float = Field(0.5, gt=0)
     # global rotation search: normal-bearing histograms of scan and local map, circularly correlated
     histogram_bin_deg: float = Field(1.0, gt=0)
     histogram_smooth_deg: float = Field(2.0, gt=0)
-    rotation_candidates: int = Field(8, ge=1)  # strongest correlation peaks kept
-    rotation_window_deg: float = Field(3.0, gt=0)  # searched around each candidate and hypothesis
+    rotation_candidates: int = Field(6, ge=1)  # strongest correlation peaks kept
+    rotation_window_deg: float = Field(2.0, gt=0)  # searched around each candidate and hypothesis
     # a candidate's score is discounted by this fraction times its turn from the nearest motion
     # hypothesis' heading in half turns (a 180° surprise loses it all): the motion prior
     motion_prior: float = Field(0.25, ge=0, lt=1)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from radioslam.slam.grid import LIKELIHOOD_FLOOR, LikelihoodGrid
+from radioslam.slam.grid import LIKELIHOOD_FLOOR, LikelihoodGrid, phasors
 from radioslam.slam.se2 import rotation
 
 
@@ -48,7 +48,7 @@ def candidate_likelihoods(grid: LikelihoodGrid, points: np.ndarray, normals: np.
     cells = candidate_cells(grid, points, pose, angles)
     x = cells[:, None, None, :, 0] + offsets[None, :, None, None]
     y = cells[:, None, None, :, 1] + offsets[None, None, :, None]
-    world_normal = (pose[2] + angles)[:, None, None, None] + normals[None, None, None, :]
+    world_normal = phasors((pose[2] + angles)[:, None, None, None] + normals[None, None, None, :])
     return grid.likelihood_at(x, y, ~np.isnan(normals), world_normal)
 
 

@@ -125,7 +125,7 @@ class FrontEnd:
         offsets = window_angles(np.radians(cfg.rotation_window_deg), self.step_rad)
         found = BranchAndBound(grid, self.grid_cfg.branch_levels).search(
             xy, phi, last[:2], (headings[:, None] + offsets[None, :]).ravel(), self.motion_cfg.max_step_m, 0.0,
-            1.0 - cfg.motion_prior)
+            1.0 - cfg.ambiguity_margin, lambda poses: self._prior_discount(poses, hypotheses))
         if found.pose is None:
             return Step(primary, self.predicted, ScanStatus.PREDICTED, 0.0, note="nothing in the local map matches")
         candidates, scores = distinct(found.candidates, found.scores, cfg.distinct_m, np.radians(cfg.distinct_deg),

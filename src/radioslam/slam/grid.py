@@ -41,6 +41,20 @@ def normal_likelihood(map_normal: np.ndarray, point_normal: np.ndarray, sigma: f
     return np.where(np.isnan(delta), 1.0, np.exp(-0.5 * (np.nan_to_num(delta) / sigma) ** 2))
 
 
+def phasors(angles: np.ndarray) -> np.ndarray:
+    """e^{iψ} of bearings, 0 where unknown (NaN): what :meth:`LikelihoodGrid.likelihood_at` compares."""
+    return np.where(np.isnan(angles), 0.0, np.exp(1j * np.nan_to_num(angles)))
+
+
+def phasor_agreement(map_phasor: np.ndarray, point_phasor: np.ndarray, sigma: float) -> np.ndarray:
+    """exp(−(1 − cos Δψ)/σ²) ≈ exp(−Δψ²/2σ²) of two unit phasors; 1 where either is 0 (unknown):
+    the exponent is Re(m·p̄) − |m|²|p|², without a wrap or a NaN test per lookup."""
+    m, p = map_phasor, point_phasor
+    dot = m.real * p.real + m.imag * p.imag
+    both = (m.real**2 + m.imag**2) * (p.real**2 + p.imag**2)
+    return np.exp((dot - both) / sigma**2)
+
+
 @dataclass(frozen=True)
 class LikelihoodGrid:
     values: np.ndarray  # (NX, NY) in [0, 1], or −penalty on known free space
@@ -49,6 +63,7 @@ class LikelihoodGrid:
     normals: np.ndarray  # (NX, NY) world normal of the nearest map point, NaN: unknown
     normal_sigma: float
     plane: np.ndarray | None = None  # (NX, NY) point-to-plane field; None: as ``values``
+    phasor: np.ndarray | None = None  # (NX, NY) e^{iψ} of ``normals``, 0 where unknown; None: computed
 
     @property
     def plane_values(self) -> np.ndarray:
@@ -66,56 +81,68 @@ class LikelihoodGrid:
                     free_penalty: float = 0.0) -> "LikelihoodGrid":
         """The field of map points (P, 2) with their world normals (P,), ``margin`` beyond them;
         cells holding a ``free`` sample (F, 2) (:mod:`radioslam.slam.free_space`) and farther than
-        3σ from every map point score −``free_penalty``: a point there contradicts the map."""
+        3σ from every map point score −``free_penalty``: a point there contradicts the map.
+        Whole-grid array operations throughout (float32 fields: the scores need no more)."""
         if len(points) == 0:
             raise SlamError("cannot build a likelihood grid from no points", field="points")
         origin = points.min(axis=0) - margin
-        shape = np.ceil((points.max(axis=0) + margin - origin) / resolution).astype(int) + 1
-        hit = np.zeros(shape, dtype=bool)
+        shape = tuple(np.ceil((points.max(axis=0) + margin - origin) / resolution).astype(int) + 1)
         cells = np.floor((points - origin) / resolution).astype(int)
-        hit[cells[:, 0], cells[:, 1]] = True
-        cell_normal = np.full(shape, np.nan)
-        if normals is not None:
-            cell_normal[cells[:, 0], cells[:, 1]] = normals
+        owner = np.full(shape, -1, dtype=np.int64)  # the map point of each hit cell (the last one wins)
+        owner[cells[:, 0], cells[:, 1]] = np.arange(len(points))
         # distance from each cell centre to the nearest hit cell centre, and which cell that is
-        d, (ix, iy) = distance_transform_edt(~hit, return_indices=True)
-        d = d * resolution
+        d, (ix, iy) = distance_transform_edt(owner < 0, return_indices=True)
+        d = (d * resolution).astype(np.float32)
+        nearest = owner[ix, iy]
+        # per map point first (few), then gathered: the nearest map point's normal in every cell
+        normal_p = np.full(len(points), np.nan) if normals is None else np.asarray(normals, dtype=np.float64)
+        known_p = ~np.isnan(normal_p)
+        angle_p = np.where(known_p, normal_p, 0.0)
+        nearest_normal, known = normal_p[nearest], known_p[nearest]
         # point-to-plane: the offset along the nearest map point's normal, within reach of it
-        plane = d.copy()
-        near = np.nonzero(d <= plane_reach)
-        hx, hy = ix[near], iy[near]
-        normal = cell_normal[hx, hy]
-        along = np.abs(np.cos(normal) * (near[0] - hx) + np.sin(normal) * (near[1] - hy)) * resolution
-        plane[near] = np.where(np.isnan(normal), plane[near], along)
+        dx = (np.arange(shape[0])[:, None] - ix).astype(np.float32)
+        dy = (np.arange(shape[1])[None, :] - iy).astype(np.float32)
+        cos_p, sin_p = np.cos(angle_p).astype(np.float32), np.sin(angle_p).astype(np.float32)
+        along = np.abs(cos_p[nearest] * dx + sin_p[nearest] * dy) * np.float32(resolution)
+        plane = np.where(known & (d <= plane_reach), along, d)
         values, plane = _gaussian(d, sigma), _gaussian(plane, sigma)
         if free is not None and len(free) and free_penalty > 0:
             c = np.floor((free - origin) / resolution).astype(np.int64)
-            c = c[np.all((c >= 0) & (c < shape), axis=1)]
+            c = c[np.all((c >= 0) & (c < np.array(shape)), axis=1)]
             contradicted = np.zeros(shape, dtype=bool)
             contradicted[c[:, 0], c[:, 1]] = True
             contradicted &= d > 3 * sigma
             values[contradicted] = plane[contradicted] = -free_penalty
-        return cls(values, origin, resolution, cell_normal[ix, iy], normal_sigma, plane)
+        for field in (values, plane):  # lookups beyond the grid clip to its border: keep it empty
+            field[[0, -1], :] = 0.0
+            field[:, [0, -1]] = 0.0
+        phasor = np.where(known_p, np.exp(1j * angle_p), 0.0).astype(np.complex64)[nearest]
+        return cls(values, origin, resolution, nearest_normal, normal_sigma, plane, phasor)
 
     def cells(self, points: np.ndarray) -> np.ndarray:
         """Integer cells (..., 2) of points (..., 2), clipped to the grid."""
         c = np.floor((points - self.origin) / self.resolution).astype(np.int64)
         return np.clip(c, 0, np.array(self.values.shape) - 1)
 
+    @cached_property
+    def normal_phasors(self) -> np.ndarray:
+        """(NX, NY) e^{iψ} of each cell's nearest map normal, 0 where unknown."""
+        return phasors(self.normals) if self.phasor is None else self.phasor
+
     def likelihood_at(self, x: np.ndarray, y: np.ndarray, on_plane: np.ndarray,
-                      world_normal: np.ndarray | None = None,
+                      point_phasor: np.ndarray | None = None,
                       fields: np.ndarray | None = None) -> np.ndarray:
-        """The field at integer cells x, y (0 outside the grid), point-to-plane where
-        ``on_plane`` (broadcast against x), times the normal agreement of points with world
-        normals ``world_normal`` (left out when None). ``fields`` (2, NX, NY) replaces the
-        point and plane fields (a max-pooled level, for branch and bound)."""
+        """The field at integer cells x, y (0 outside the grid: its border cells are 0),
+        point-to-plane where ``on_plane`` (broadcast against x), times the normal agreement of
+        points whose world normals have phasors ``point_phasor`` (:func:`phasors`; left out when
+        None). ``fields`` (2, NX, NY) replaces the point and plane fields (a max-pooled level, for
+        branch and bound)."""
         fields = self.fields if fields is None else fields
         nx, ny = fields.shape[1:]
-        inside = (x >= 0) & (x < nx) & (y >= 0) & (y < ny)
         x, y = np.clip(x, 0, nx - 1), np.clip(y, 0, ny - 1)
-        like = np.where(inside, fields[np.asarray(on_plane, dtype=np.int64), x, y], 0.0)
-        if world_normal is not None:  # free space (negative) contradicts whatever the normal
-            agree = normal_likelihood(self.normals[x, y], world_normal, self.normal_sigma)
+        like = fields[np.asarray(on_plane, dtype=np.int64), x, y]
+        if point_phasor is not None:  # free space (negative) contradicts whatever the normal
+            agree = phasor_agreement(self.normal_phasors[x, y], point_phasor, self.normal_sigma)
             like = np.where(like > 0, like * agree, like)
         return like
 
@@ -156,11 +183,10 @@ class LikelihoodGrid:
 
 
 def _gaussian(distance: np.ndarray, sigma: float) -> np.ndarray:
-    """exp(−d²/2σ²), exactly 0 beyond 6σ (below 1.6e-8, and far cheaper on a large grid)."""
-    out = np.zeros(distance.shape)
-    near = distance < 6 * sigma
-    out[near] = np.exp(-0.5 * (distance[near] / sigma) ** 2)
-    return out
+    """exp(−d²/2σ²) in float32, exactly 0 beyond 6σ (below 1.6e-8)."""
+    g = np.exp(np.float32(-0.5 / sigma**2) * np.square(distance, dtype=np.float32))
+    g[distance >= 6 * sigma] = 0.0
+    return g
 
 
 def _pool_twice(fields: np.ndarray, shift: int) -> np.ndarray:

@@ -107,7 +107,7 @@ class LoopCloser:
         """Verified loop closures of scan k against older submaps near its pose; ``drift(anchor, k,
         distance)`` is the covariance the odometry accumulated between the two poses."""
         current = estimates[k]
-        margin = max(self.front_cfg.window_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
+        margin = max(2 * self.front_cfg.window_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
         found = []
         for s in self.submaps[:max(0, len(self.submaps) - 1 - self.cfg.skip_submaps)]:
             members = np.array([estimates[m][:2] for m in s.keys])
@@ -144,7 +144,8 @@ class LoopCloser:
 
     def _local_fit(self, grid: LikelihoodGrid, points: ScanPoints, start: np.ndarray):
         f, step = self.front_cfg, np.radians(self.front_cfg.angle_step_deg)
-        local = correlative_match(grid, points.xy, points.normals, start, f.window_m, np.radians(f.window_deg), step)
+        local = correlative_match(grid, points.xy, points.normals, start, 2 * f.window_m, np.radians(2 * f.window_deg),
+                                  step)
         return local, refine_pose(grid, points.xy, points.normals, local.pose, grid.resolution, step)
 
     def relocalize(self, k: int, points: ScanPoints, estimates: dict[int, np.ndarray],
