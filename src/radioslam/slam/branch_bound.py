@@ -92,10 +92,8 @@ class BranchAndBound:
         ga, gx, gy = np.meshgrid(np.arange(len(headings)), starts, starts, indexing="ij")
         nodes = np.stack([ga.ravel(), gx.ravel(), gy.ravel()], axis=1)
         exhaustive = len(headings) * (2 * reach + 1) ** 2
-        res_pose = np.array([res, res, 1.0])
-
         def pose_of(node):
-            return np.array([centre[0], centre[1], 0.0]) + res_pose * [node[1], node[2], 0.0] + [0, 0, headings[node[0]]]
+            return np.array([centre[0] + res * node[1], centre[1] + res * node[2], headings[node[0]]])
 
         threshold, evaluated = min_score, 0
         for level in range(self.levels, -1, -1):

@@ -76,6 +76,11 @@ class FrontEndConfig(_Section):
     translation_prior: float = Field(0.2, ge=0, lt=1)
     # two distinct candidates whose discounted scores differ by less than this fraction are ambiguous
     ambiguity_margin: float = Field(0.08, ge=0, lt=1)
+    # branch and bound scores on the 5 cm lattice, where a point may sit a cell from its wall (a
+    # loss of up to e^(-1/2) per point): it keeps candidates this much further below the best, and up
+    # to refined_candidates of them are refined and scored off the lattice before any decision
+    lattice_allowance: float = Field(0.15, ge=0, lt=1)
+    refined_candidates: int = Field(4, ge=1)
     # candidates nearer than this in position and heading are one hypothesis (non-maximum suppression)
     distinct_m: float = Field(0.3, gt=0)
     distinct_deg: float = Field(6.0, gt=0)

@@ -30,7 +30,7 @@ from radioslam.slam.free_space import free_samples
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.motion import Hypothesis, MotionHypothesis, MotionModel
 from radioslam.slam.normals import specular_normals, wall_points
-from radioslam.slam.refine import refine_pose
+from radioslam.slam.refine import fit_score, refine_pose
 from radioslam.slam.rotation_search import merge_headings, rotation_candidates
 from radioslam.slam.se2 import between, transform_points, wrap_angle
 from radioslam.slam.status import ScanStatus
@@ -125,25 +125,30 @@ class FrontEnd:
         offsets = window_angles(np.radians(cfg.rotation_window_deg), self.step_rad)
         found = BranchAndBound(grid, self.grid_cfg.branch_levels).search(
             xy, phi, last[:2], (headings[:, None] + offsets[None, :]).ravel(), self.motion_cfg.max_step_m, 0.0,
-            1.0 - cfg.ambiguity_margin, lambda poses: self._prior_discount(poses, hypotheses))
+            1.0 - cfg.ambiguity_margin - cfg.lattice_allowance, lambda poses: self._prior_discount(poses, hypotheses))
         if found.pose is None:
             return Step(primary, self.predicted, ScanStatus.PREDICTED, 0.0, note="nothing in the local map matches")
-        candidates, scores = distinct(found.candidates, found.scores, cfg.distinct_m, np.radians(cfg.distinct_deg),
-                                      cfg.rotation_candidates)
+        candidates, _ = distinct(found.candidates, found.scores, cfg.distinct_m, np.radians(cfg.distinct_deg),
+                                 cfg.refined_candidates)
+        # each candidate refined off the lattice and scored on the interpolated field: a pose between
+        # cells must not lose to one that happens to sit on the lattice
+        candidates = np.array([refine_pose(grid, xy, phi, c, self.grid_cfg.resolution_m, self.step_rad)
+                               for c in candidates])
+        scores = np.array([fit_score(grid, xy, phi, c) for c in candidates])
         discount = self._prior_discount(candidates, hypotheses)
         adjusted = scores * (1.0 - discount)
         # the scans cannot tell apart what scores within the margin of the best: there the motion decides
         close = np.flatnonzero(adjusted >= (1.0 - cfg.ambiguity_margin) * adjusted.max())
         chosen = int(close[np.argmin(discount[close])])
         rivals = candidates[np.setdiff1d(close, [chosen])]
-        match = correlative_match(grid, xy, phi, candidates[chosen], cfg.window_m, np.radians(cfg.window_deg),
-                                  self.step_rad)
-        pose = refine_pose(grid, xy, phi, match.pose, self.grid_cfg.resolution_m, self.step_rad)
+        pose, score = candidates[chosen], float(scores[chosen])
+        # the response surface around it gives the covariance (Olson 2009 §IV)
+        match = correlative_match(grid, xy, phi, pose, cfg.window_m, np.radians(cfg.window_deg), self.step_rad)
         cov = match.covariance + self.floor
-        weight = float(np.clip((match.score - cfg.min_match_score) / cfg.trust_ramp, 0.0, 1.0))
+        weight = float(np.clip((score - cfg.min_match_score) / cfg.trust_ramp, 0.0, 1.0))
         if weight == 0.0:
-            return Step(primary, self.predicted, ScanStatus.PREDICTED, match.score,
-                        note=f"match score {match.score:.2f} < {cfg.min_match_score:.2f}")
+            return Step(primary, self.predicted, ScanStatus.PREDICTED, score,
+                        note=f"match score {score:.2f} < {cfg.min_match_score:.2f}")
         weak = self.degeneracy.matched_weak(grid, pose, xy, phi, cov)
         if weak is not None:  # candidates that only slide along the weak direction are not rivals
             across = (rivals[:, :2] - pose[:2]) - np.outer((rivals[:, :2] - pose[:2]) @ weak, weak)
@@ -165,7 +170,7 @@ class FrontEnd:
             note = f"ambiguous: {len(rivals)} other pose(s) score within {cfg.ambiguity_margin:.0%}"
         if weight < 1.0:
             pose, cov = fuse(pose, cov, weight, primary, self.predicted)
-        return Step(pose, cov, status, match.score, rivals, note)
+        return Step(pose, cov, status, score, rivals, note)
 
     def _prior_discount(self, candidates: np.ndarray, hypotheses: list[Hypothesis]) -> np.ndarray:
         """The motion prior as a fraction (C,) of each candidate's score: ``motion_prior`` times its

@@ -66,3 +66,10 @@ def refine_pose(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, s
             damping *= grow
             grow *= 2
     return pose
+
+
+def fit_score(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, pose: np.ndarray) -> float:
+    """The mean interpolated point likelihood (normal agreement included) at ``pose``: the
+    normalized score off the lattice, 1 − mean residual."""
+    residual, _ = fit_terms(grid, points, normals, pose)
+    return float(1.0 - residual.mean())
