@@ -88,17 +88,19 @@ class RadioSlam:
             BackEnd.from_config(cfg)
         steps: list[Step] = []
         seconds, lost = [], 0  # lost: consecutive scans nothing matched
+        drop = Contradiction(cfg.loop_closure.contradicted_fraction, cfg.loop_closure.relocalize_gain)
         for k, scan in enumerate(scans):
             tick = time.perf_counter()
             # 1. the scan's points and the specular normal of the wall each came from
             points = prepare_points(scan, cfg.scan)
             # 2. register it against the local map: the motion's hypotheses and the scan's own rotation candidates
             step = front_end.register(k, points, back_end.estimates)
-            # 3. a scan lost after others is relocalized against every submap, or keeps the motion model's pose
+            # 3. a lost scan (one of a stretch nothing matched, or one whose match puts points on space the map
+            #    saw through) is searched for in the whole map: relocalized where the map explains it far better
             lost = lost + 1 if step.status is ScanStatus.PREDICTED else 0
-            found = loop_closer.relocalize(k, points, back_end.estimates, back_end.version) \
-                if lost >= cfg.loop_closure.relocalize_after and loop_closer.submaps else None
-            if found is not None:
+            suspect = lost >= cfg.loop_closure.relocalize_after or drop.suspicious(step)
+            found = loop_closer.relocalize(k, points, back_end.estimates, k - lost) if suspect else None
+            if found is not None and (step.status is ScanStatus.PREDICTED or drop.better(found.score, step)):
                 step = front_end.relocalized(back_end.relocalized_pose(found), found.score)
             # 4. the pose and the factors tying it to the previous one into the pose graph
             back_end.add(k, step, front_end.motion.odometry_step(k))
@@ -125,6 +127,23 @@ class RadioSlam:
                             loops=back_end.loops, seconds_per_scan=np.array(seconds), lost_after=lost_after)
         result.warnings = [f"scan {k}: {s.note}" for k, s in enumerate(steps) if s.note] + result.summary_lines()
         return result
+
+
+@dataclass
+class Contradiction:
+    """A matched scan that puts at least ``fraction`` of its points on space the map saw through is
+    suspect: exploring puts points where the map knows nothing, but a wrong place (a kidnapped
+    terminal still half-matches the room's long walls within a step of where it was) puts them
+    across free space. It is relocalized only where the map explains it ``gain`` better."""
+
+    fraction: float
+    gain: float
+
+    def suspicious(self, step: Step) -> bool:
+        return step.status is not ScanStatus.SKIPPED and step.contradicted >= self.fraction
+
+    def better(self, score: float, step: Step) -> bool:
+        return self.suspicious(step) and score >= (1.0 + self.gain) * step.score
 
 
 def scan_ranges(keys: list[int]) -> str:

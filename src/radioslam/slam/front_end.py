@@ -24,7 +24,7 @@ import numpy as np
 from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.branch_bound import BranchAndBound, distinct, window_angles
 from radioslam.slam.config import FrontEndConfig, GridConfig, MotionConfig, ScanConfig
-from radioslam.slam.correlative import correlative_match
+from radioslam.slam.correlative import candidate_likelihoods, correlative_match
 from radioslam.slam.degeneracy import DegeneracyTest, remap
 from radioslam.slam.free_space import free_samples
 from radioslam.slam.grid import LikelihoodGrid
@@ -64,6 +64,7 @@ class Step:
     score: float = float("nan")  # normalized match score; NaN where nothing was matched
     rivals: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # other hypotheses within the margin
     note: str = ""  # why the status is not MATCHED, for the warnings
+    contradicted: float = 0.0  # fraction of the points on space the map saw through (a wrong place)
 
 
 def fuse(pose: np.ndarray, covariance: np.ndarray, weight: float, prior: np.ndarray,
@@ -142,13 +143,14 @@ class FrontEnd:
         chosen = int(close[np.argmin(discount[close])])
         rivals = candidates[np.setdiff1d(close, [chosen])]
         pose, score = candidates[chosen], float(scores[chosen])
+        contradicted = float(np.mean(candidate_likelihoods(grid, xy, phi, pose, np.zeros(1), np.zeros(1, int)) < 0))
         # the response surface around it gives the covariance (Olson 2009 §IV)
         match = correlative_match(grid, xy, phi, pose, cfg.window_m, np.radians(cfg.window_deg), self.step_rad)
         cov = match.covariance + self.floor
         weight = float(np.clip((score - cfg.min_match_score) / cfg.trust_ramp, 0.0, 1.0))
         if weight == 0.0:
             return Step(primary, self.predicted, ScanStatus.PREDICTED, score,
-                        note=f"match score {score:.2f} < {cfg.min_match_score:.2f}")
+                        note=f"match score {score:.2f} < {cfg.min_match_score:.2f}", contradicted=contradicted)
         weak = self.degeneracy.matched_weak(grid, pose, xy, phi, cov)
         if weak is not None:  # candidates that only slide along the weak direction are not rivals
             across = (rivals[:, :2] - pose[:2]) - np.outer((rivals[:, :2] - pose[:2]) @ weak, weak)
@@ -170,7 +172,7 @@ class FrontEnd:
             note = f"ambiguous: {len(rivals)} other pose(s) score within {cfg.ambiguity_margin:.0%}"
         if weight < 1.0:
             pose, cov = fuse(pose, cov, weight, primary, self.predicted)
-        return Step(pose, cov, status, score, rivals, note)
+        return Step(pose, cov, status, score, rivals, note, contradicted)
 
     def _prior_discount(self, candidates: np.ndarray, hypotheses: list[Hypothesis]) -> np.ndarray:
         """The motion prior as a fraction (C,) of each candidate's score: ``motion_prior`` times its

@@ -17,9 +17,11 @@ and falls from 1 at half the gate to 0 at the gate, so a loop on the edge of acc
 carries almost no weight either way.
 
 Relocalization (the global constraint search of Cartographer): a lost scan is matched
-against every submap, over the submap's whole extent and every heading the normals suggest
-(:mod:`radioslam.slam.rotation_search`); a match that scores ``relocalize_min_score``, is not
-degenerate and has no rival within the ambiguity margin places the scan again.
+against the whole map (every earlier scan with the free space it saw, one grid; small
+submaps, each seen from a few poses, let a wrong place outscore the right one), over its
+whole extent and every heading the normals suggest (:mod:`radioslam.slam.rotation_search`);
+a match that scores ``relocalize_min_score``, is not degenerate and has no rival place within
+the ambiguity margin places the scan again.
 """
 
 from __future__ import annotations
@@ -33,11 +35,13 @@ from radioslam.slam.branch_bound import BranchAndBound, distinct, window_angles
 from radioslam.slam.config import FrontEndConfig, GridConfig, LoopClosureConfig
 from radioslam.slam.correlative import correlative_match
 from radioslam.slam.degeneracy import DegeneracyTest
+from radioslam.slam.free_space import free_samples
 from radioslam.slam.front_end import ScanPoints
 from radioslam.slam.grid import LikelihoodGrid
-from radioslam.slam.refine import refine_pose
+from radioslam.slam.pose_graph import local_covariance
+from radioslam.slam.refine import fit_score, refine_pose
 from radioslam.slam.rotation_search import merge_headings, rotation_candidates
-from radioslam.slam.se2 import between, compose, wrap_angle
+from radioslam.slam.se2 import between, transform_points, wrap_angle
 from radioslam.slam.submap import Submap, fused_points
 
 
@@ -72,6 +76,7 @@ class LoopCloser:
     degeneracy: DegeneracyTest
     submaps: list[Submap] = field(default_factory=list)
     points: dict[int, ScanPoints] = field(default_factory=dict)
+    free: dict[int, np.ndarray] = field(default_factory=dict)  # terminal-frame free-space samples per scan
     matchers: dict[tuple[int, int], tuple[int, BranchAndBound]] = field(default_factory=dict)
 
     @classmethod
@@ -87,6 +92,8 @@ class LoopCloser:
             self.submaps.append(Submap())
         self.submaps[-1].keys.append(k)
         self.points[k] = points
+        g = self.grid_cfg
+        self.free[k] = free_samples(points.xy, points.normals, g.free_stop_m, g.free_pose_radius_m, g.resolution_m / 2)
 
     def _grid(self, submap: Submap, estimates, margin: float) -> LikelihoodGrid:
         g = self.grid_cfg
@@ -149,46 +156,44 @@ class LoopCloser:
         return local, refine_pose(grid, points.xy, points.normals, local.pose, grid.resolution, step)
 
     def relocalize(self, k: int, points: ScanPoints, estimates: dict[int, np.ndarray],
-                   version: int) -> LoopClosure | None:
-        """Scan k placed in the submap where it matches best, over every submap's whole extent and
-        every heading its normals suggest; None when no place holds it unambiguously (another
-        place in the world, not merely an overlapping submap, scoring within the margin)."""
-        c, f = self.cfg, self.front_cfg
-        margin = c.relocalize_margin_m + 3 * self.grid_cfg.sigma_m
+                   before: int | None = None) -> LoopClosure | None:
+        """Scan k placed where it matches best in the whole map (every scan before ``before``, at the
+        latest poses, with the free space they saw), over the map's extent and every heading the
+        normals suggest; None when no place holds it unambiguously (a rival place within the
+        ambiguity margin: a symmetric room), or the match is weak or degenerate. The constraint ties
+        it to the map scan nearest the place found."""
+        c, f, g = self.cfg, self.front_cfg, self.grid_cfg
+        keys = [m for m in self.points if m != k and (before is None or m < before)]
+        if not keys:
+            return None
+        xy, normals = fused_points(keys, estimates, {m: self.points[m].xy for m in keys},
+                                   {m: self.points[m].normals for m in keys}, np.zeros(3))
+        free = np.concatenate([transform_points(estimates[m], self.free[m]) for m in keys])
+        grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, c.relocalize_margin_m, normals,
+                                          np.radians(g.normal_sigma_deg), g.plane_reach_m, free, g.free_penalty)
+        lo, hi = grid.origin, grid.origin + np.array(grid.values.shape) * grid.resolution
+        headings = merge_headings(rotation_candidates(points.normals, normals, np.radians(f.histogram_bin_deg),
+                                                      np.radians(f.histogram_smooth_deg), f.rotation_candidates),
+                                  np.radians(f.rotation_window_deg))
+        if len(headings) == 0:  # no normals to suggest a heading: every one
+            headings = np.arange(0.0, 2 * np.pi, 2 * np.radians(f.rotation_window_deg))
         offsets = window_angles(np.radians(f.rotation_window_deg), np.radians(f.angle_step_deg))
-        world, scores, sources = [], [], []
-        for s in self.submaps:
-            if k in s.keys:
-                continue
-            matcher = self._matcher(s, estimates, version, margin, c.relocalize_levels)
-            grid = matcher.grid
-            lo, hi = grid.origin, grid.origin + np.array(grid.values.shape) * grid.resolution
-            _, map_normals = fused_points(s.keys, estimates, {m: self.points[m].xy for m in s.keys},
-                                          {m: self.points[m].normals for m in s.keys}, estimates[s.anchor])
-            headings = merge_headings(rotation_candidates(points.normals, map_normals, np.radians(f.histogram_bin_deg),
-                                                          np.radians(f.histogram_smooth_deg), f.rotation_candidates),
-                                      np.radians(f.rotation_window_deg))
-            if len(headings) == 0:  # no normals to suggest a heading: every one
-                headings = np.arange(0.0, 2 * np.pi, 2 * np.radians(f.rotation_window_deg))
-            found = matcher.search(points.xy, points.normals, 0.5 * (lo + hi), (headings[:, None] + offsets).ravel(),
-                                   0.5 * float(np.max(hi - lo)), c.relocalize_min_score, 1.0 - f.ambiguity_margin)
-            if found.pose is None:
-                continue
-            poses, best = distinct(found.candidates, found.scores, f.distinct_m, np.radians(f.distinct_deg), 2)
-            world.append(compose(estimates[s.anchor], poses))
-            scores.append(best)
-            sources += [(matcher, s.anchor, p) for p in poses]
-        if not world:
+        found = BranchAndBound(grid, c.relocalize_levels).search(
+            points.xy, points.normals, 0.5 * (lo + hi), (headings[:, None] + offsets).ravel(),
+            0.5 * float(np.max(hi - lo)), c.relocalize_min_score, 1.0 - f.ambiguity_margin - f.lattice_allowance)
+        if found.pose is None:
             return None
-        world, scores = np.concatenate(world), np.concatenate(scores)
-        order = np.argsort(-scores, kind="stable")
-        places, place_scores = distinct(world[order], scores[order], f.distinct_m, np.radians(f.distinct_deg), 2)
-        matcher, anchor, start = sources[order[0]]
-        local, pose = self._local_fit(matcher.grid, points, start)
-        # a rival place within the margin (a symmetric room) or a degenerate match places nothing
-        if len(places) > 1 and place_scores[1] >= (1.0 - f.ambiguity_margin) * place_scores[0]:
+        places, _ = distinct(found.candidates, found.scores, f.distinct_m, np.radians(f.distinct_deg),
+                             f.refined_candidates)
+        fits = [self._local_fit(grid, points, place) for place in places]
+        scores = np.array([fit_score(grid, points.xy, points.normals, pose) for _, pose in fits])
+        best = int(np.argmax(scores))
+        (local, pose), score = fits[best], float(scores[best])
+        rivals = np.delete(scores, best)
+        if np.any(rivals >= (1.0 - f.ambiguity_margin) * score) or score < c.relocalize_min_score:
             return None
-        if local.score < c.relocalize_min_score or self.degeneracy.matched_weak(
-                matcher.grid, pose, points.xy, points.normals, local.covariance) is not None:
+        if self.degeneracy.matched_weak(grid, pose, points.xy, points.normals, local.covariance) is not None:
             return None
-        return LoopClosure(anchor, k, pose, local.covariance, local.score, 1.0, relocalization=True)
+        anchor = keys[int(np.argmin([np.linalg.norm(estimates[m][:2] - pose[:2]) for m in keys]))]
+        return LoopClosure(anchor, k, between(estimates[anchor], pose), local_covariance(local.covariance,
+                           estimates[anchor][2]), score, 1.0, relocalization=True)
