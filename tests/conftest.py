@@ -12,3 +12,12 @@ def radio() -> RadioConfig:
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(20261122)
+
+
+@pytest.fixture(scope="session")
+def demo_run(tmp_path_factory):
+    """The demo's run directory (paper-cnv, seed 1), made once for every test that reads it."""
+    from radioslam.pipeline import run_scene
+
+    out = tmp_path_factory.mktemp("demo")
+    return out, run_scene("paper-cnv", out, 1, None)[1]

@@ -129,6 +129,9 @@ class LoopClosureConfig(_Section):
     window_m: float = Field(1.5, gt=0)
     window_deg: float = Field(20.0, gt=0)
     min_score: float = Field(0.35, ge=0, le=1)  # normalized score: mean point likelihood
+    # a loop's scan lies where the submap's scans saw the same walls: its arcs overlap theirs, and a
+    # long point-to-plane reach (the front end's, for steps up to 1 m) would let it slide along them
+    plane_reach_m: float = Field(0.5, ge=0)
     # a loop's weight grows smoothly from 0 at min_score to 1 at min_score + score_ramp, and falls
     # smoothly to 0 as its χ² approaches the gate (no cliff where a loop is accepted)
     score_ramp: float = Field(0.10, gt=0)

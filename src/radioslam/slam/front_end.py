@@ -141,7 +141,11 @@ class FrontEnd:
         # the scans cannot tell apart what scores within the margin of the best: there the motion decides
         close = np.flatnonzero(adjusted >= (1.0 - cfg.ambiguity_margin) * adjusted.max())
         chosen = int(close[np.argmin(discount[close])])
-        rivals = candidates[np.setdiff1d(close, [chosen])]
+        # rivals: what the scan alone cannot tell from the choice (within the margin of its score, or above);
+        # those the motion could not tell apart either widen the covariance
+        rivals = candidates[np.setdiff1d(np.flatnonzero(scores >= (1.0 - cfg.ambiguity_margin) * scores[chosen]),
+                                         [chosen])]
+        undecided = candidates[np.setdiff1d(close, [chosen])]
         pose, score = candidates[chosen], float(scores[chosen])
         contradicted = float(np.mean(candidate_likelihoods(grid, xy, phi, pose, np.zeros(1), np.zeros(1, int)) < 0))
         # the response surface around it gives the covariance (Olson 2009 §IV)
@@ -153,9 +157,7 @@ class FrontEnd:
                         note=f"match score {score:.2f} < {cfg.min_match_score:.2f}", contradicted=contradicted)
         weak = self.degeneracy.matched_weak(grid, pose, xy, phi, cov)
         if weak is not None:  # candidates that only slide along the weak direction are not rivals
-            across = (rivals[:, :2] - pose[:2]) - np.outer((rivals[:, :2] - pose[:2]) @ weak, weak)
-            rivals = rivals[(np.linalg.norm(across, axis=1) > cfg.distinct_m)
-                            | (np.abs(wrap_angle(rivals[:, 2] - pose[2])) > np.radians(cfg.distinct_deg))]
+            rivals, undecided = (self._across(r, pose, weak) for r in (rivals, undecided))
         status, note = ScanStatus.MATCHED, ""
         if weak is not None:
             # a direction the walls cannot fix keeps the paced prediction there (Zhang et al. 2016)
@@ -164,15 +166,23 @@ class FrontEnd:
             note = (f"degenerate match, nothing fixes the position along "
                     f"{np.degrees(np.arctan2(weak[1], weak[0])):.0f}° (predicted instead)")
         if len(rivals):
-            # the scans cannot decide: widen the covariance over the rivals, keep the nearest to the motion
-            spread = rivals - pose
-            spread[:, 2] = wrap_angle(spread[:, 2])
-            cov = cov + spread.T @ spread / len(rivals)
             status = ScanStatus.AMBIGUOUS
+        if len(undecided):
+            # neither the scan nor the motion can decide: widen the covariance over the poses left
+            spread = undecided - pose
+            spread[:, 2] = wrap_angle(spread[:, 2])
+            cov = cov + spread.T @ spread / len(undecided)
             note = f"ambiguous: {len(rivals)} other pose(s) score within {cfg.ambiguity_margin:.0%}"
         if weight < 1.0:
             pose, cov = fuse(pose, cov, weight, primary, self.predicted)
         return Step(pose, cov, status, score, rivals, note, contradicted)
+
+    def _across(self, rivals: np.ndarray, pose: np.ndarray, weak: np.ndarray) -> np.ndarray:
+        """The rivals that differ from ``pose`` other than by sliding along the weak direction."""
+        d = rivals[:, :2] - pose[:2]
+        across = d - np.outer(d @ weak, weak)
+        return rivals[(np.linalg.norm(across, axis=1) > self.cfg.distinct_m)
+                      | (np.abs(wrap_angle(rivals[:, 2] - pose[2])) > np.radians(self.cfg.distinct_deg))]
 
     def _prior_discount(self, candidates: np.ndarray, hypotheses: list[Hypothesis]) -> np.ndarray:
         """The motion prior as a fraction (C,) of each candidate's score: ``motion_prior`` times its

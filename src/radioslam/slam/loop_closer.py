@@ -79,6 +79,12 @@ class LoopCloser:
     free: dict[int, np.ndarray] = field(default_factory=dict)  # terminal-frame free-space samples per scan
     matchers: dict[tuple[int, int], tuple[int, BranchAndBound]] = field(default_factory=dict)
 
+    @property
+    def floor(self) -> np.ndarray:
+        """The front end's covariance floor: a loop's response surface is as over-confident."""
+        f = self.front_cfg
+        return np.diag([f.floor_sigma_m**2] * 2 + [np.radians(f.floor_sigma_deg) ** 2])
+
     @classmethod
     def from_config(cls, cfg) -> "LoopCloser":
         f = cfg.front_end
@@ -100,7 +106,7 @@ class LoopCloser:
         xy, nrm = fused_points(submap.keys, estimates, {m: self.points[m].xy for m in submap.keys},
                                {m: self.points[m].normals for m in submap.keys}, estimates[submap.anchor])
         return LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, nrm, np.radians(g.normal_sigma_deg),
-                                          g.plane_reach_m)
+                                          self.cfg.plane_reach_m)
 
     def _matcher(self, submap: Submap, estimates, version: int, margin: float, levels: int) -> BranchAndBound:
         """The submap's matcher for this pose-graph solution (built once per solution)."""
@@ -140,14 +146,14 @@ class LoopCloser:
         # the response surface around the winner gives the covariance (Olson 2009 §IV)
         local, pose = self._local_fit(grid, points, found.pose)
         score_weight = smooth_step((local.score - c.min_score) / c.score_ramp)
-        chi2 = mahalanobis2(pose, predicted, drift + local.covariance)
+        chi2 = mahalanobis2(pose, predicted, drift + local.covariance + self.floor)
         weight = score_weight * smooth_step(2.0 * (c.gate_chi2 - chi2) / c.gate_chi2)
         if weight <= 0.0:
             return None
         # the points that agree with the submap must fix every direction (Zhang et al. 2016)
         if self.degeneracy.matched_weak(grid, pose, points.xy, points.normals, local.covariance) is not None:
             return None
-        return LoopClosure(anchor, key, pose, local.covariance / weight, local.score, weight)
+        return LoopClosure(anchor, key, pose, (local.covariance + self.floor) / weight, local.score, weight)
 
     def _local_fit(self, grid: LikelihoodGrid, points: ScanPoints, start: np.ndarray):
         f, step = self.front_cfg, np.radians(self.front_cfg.angle_step_deg)
