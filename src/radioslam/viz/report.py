@@ -8,11 +8,15 @@ import html
 import json
 from pathlib import Path
 
+import numpy as np
+
 from radioslam.io import read_scan, read_tum
 from radioslam.io.atomic import atomic_write_text
 from radioslam.io.rundir import RunDir
 from radioslam.scene import load_scene
+from radioslam.slam.status import ScanStatus
 from radioslam.viz.fig6 import fig6_figure
+from radioslam.viz.status_strip import status_strip
 
 
 def write_report(out: Path) -> Path:
@@ -26,6 +30,14 @@ def write_report(out: Path) -> Path:
     fig6_figure(figure, scene.segments, truth, odometry, estimate, scans, title=scene.name)
     metrics = json.loads(run.metrics.read_text(encoding="utf-8"))
     summary = json.loads(run.slam_summary.read_text(encoding="utf-8"))
+    strip = run.root / "scan_status.png"
+    statuses = [ScanStatus(v) for v in summary.get("scan_status", [])]
+    scores = np.array([np.nan if v is None else v for v in summary.get("match_score", [None] * len(statuses))],
+                      dtype=float)
+    status_strip(strip, statuses, scores)
+    strip_image = base64.b64encode(strip.read_bytes()).decode()
+    lost = "tracking lost: scans " + ", ".join(str(k) for k in summary.get("lost_scans", [])) \
+        if summary.get("tracking_lost") else "tracking held throughout"
     rows = "".join(f"<tr><td>{html.escape(k)}</td><td>{html.escape(_fmt(v))}</td></tr>" for k, v in metrics.items())
     image = base64.b64encode(figure.read_bytes()).decode()
     page = f"""<!doctype html><html><head><meta charset="utf-8"><title>radioslam: {html.escape(scene.name)}</title>
@@ -35,6 +47,8 @@ pre{{background:#f4f4f4;padding:1em;overflow:auto}}</style></head><body>
 <p>{len(truth)} poses. Figure: (a) reflection energy, (b) map without PGO, (c) map with PGO;
 true walls in grey, ground truth dashed.</p>
 <img alt="Fig. 6" style="width:100%" src="data:image/png;base64,{image}">
+<h2>Scan statuses</h2><p>{html.escape(lost)}.</p>
+<img alt="scan statuses" style="width:100%" src="data:image/png;base64,{strip_image}">
 <h2>Metrics</h2><table>{rows}</table>
 <h2>Warnings</h2><pre>{html.escape(chr(10).join(summary.get("warnings", [])) or "none")}</pre>
 <h2>SLAM parameters</h2><pre>{html.escape(json.dumps(summary.get("config", {}), indent=2))}</pre>
