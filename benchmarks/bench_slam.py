@@ -70,7 +70,7 @@ def main() -> None:
     scene = load_scene("paper-cnv")
     scans = sensed(scene, args.seed)
     per_scan, per_run, share = timed(scans, args.repeats)
-    hall = generate_case(RoomKind.HALL, MotionKind.UTURN, 4, snr_db=10.0, max_poses=100).scene
+    hall = generate_case(RoomKind.HALL, MotionKind.SMOOTH, 4, snr_db=10.0, step_m=0.6, max_poses=100).scene
     hall_scans = sensed(hall, args.seed)
     hall_per_scan, _, hall_share = timed(hall_scans, args.repeats)
     demo = []

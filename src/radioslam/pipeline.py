@@ -158,13 +158,12 @@ def read_odometry(path: Path, scans: int) -> np.ndarray:
 def run_scene(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None,
               cfg: SlamConfig | None = None, odometry: Path | None = None) -> tuple[SlamResult, dict]:
     """Simulate and sense, SLAM, evaluate: a whole run directory; the SLAM result and metrics."""
+    simulated = odometry is not None and str(odometry) == SIMULATED_ODOMETRY
+    if simulated and load_scene(scene_name).spec.odometry is None:
+        raise RadioslamError("the scene has no odometry: block to simulate one from", file=scene_name,
+                             field="odometry")
     timings = simulate_and_sense(scene_name, out, seed, snr_db, advance)
-    if odometry is not None and str(odometry) == SIMULATED_ODOMETRY:
-        odometry = RunDir(out).odometry
-        if not odometry.exists():
-            raise RadioslamError("the scene has no odometry: block to simulate one from", file=scene_name,
-                                 field="odometry")
-    result = slam_stage(out, cfg, timings, odometry)
+    result = slam_stage(out, cfg, timings, RunDir(out).odometry if simulated else odometry)
     return result, evaluate_stage(out)
 
 
