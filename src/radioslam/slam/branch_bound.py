@@ -64,7 +64,7 @@ class BranchAndBound:
 
     def _children(self, nodes, level, reach):
         half = 2 ** (level - 1)
-        steps = np.array([[0, 0, 0], [0, half, 0], [0, 0, half], [0, half, half]])
+        steps = np.array([[0, 0, 0], [0, half, 0], [0, 0, half], [0, half, half]], dtype=np.int32)
         kids = (nodes[:, None, :] + steps[None]).reshape(-1, 3)
         return kids[(kids[:, 1] <= reach) & (kids[:, 2] <= reach)]
 
@@ -90,7 +90,7 @@ class BranchAndBound:
         top = 2**self.levels
         starts = np.arange(-reach, reach + 1, top)
         ga, gx, gy = np.meshgrid(np.arange(len(headings)), starts, starts, indexing="ij")
-        nodes = np.stack([ga.ravel(), gx.ravel(), gy.ravel()], axis=1)
+        nodes = np.stack([ga.ravel(), gx.ravel(), gy.ravel()], axis=1).astype(np.int32)
         exhaustive = len(headings) * (2 * reach + 1) ** 2
         def pose_of(node):
             return np.array([centre[0] + res * node[1], centre[1] + res * node[2], headings[node[0]]])

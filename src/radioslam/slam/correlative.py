@@ -32,7 +32,7 @@ class Match:
 def heading_cells(grid: LikelihoodGrid, points: np.ndarray, xy: np.ndarray, headings: np.ndarray) -> np.ndarray:
     """Cells (A, P, 2) of the scan points rotated to each heading (A,) and placed at ``xy``."""
     rotated = np.einsum("aij,pj->api", rotation(headings), points)
-    return np.floor((rotated + np.asarray(xy)[:2] - grid.origin) / grid.resolution).astype(np.int64)
+    return np.floor((rotated + np.asarray(xy)[:2] - grid.origin) / grid.resolution).astype(np.int32)
 
 
 def candidate_cells(grid: LikelihoodGrid, points: np.ndarray, pose: np.ndarray,

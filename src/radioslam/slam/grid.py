@@ -140,7 +140,7 @@ class LikelihoodGrid:
         fields = self.fields if fields is None else fields
         nx, ny = fields.shape[1:]
         x, y = np.clip(x, 0, nx - 1), np.clip(y, 0, ny - 1)
-        like = fields[np.asarray(on_plane, dtype=np.int64), x, y]
+        like = fields[np.asarray(on_plane, dtype=np.int32), x, y]
         if point_phasor is not None:  # free space (negative) contradicts whatever the normal
             agree = phasor_agreement(self.normal_phasors[x, y], point_phasor, self.normal_sigma)
             like = np.where(like > 0, like * agree, like)
