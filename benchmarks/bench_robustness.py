@@ -54,17 +54,18 @@ def sensed_scans(case: Case, cache: Path) -> list[Scan]:
         return [Scan(*(data[f"{k}_{f}"] for f in FIELDS)) for k in range(int(data["count"]))]
 
 
-def run_case(case: Case, cache: Path) -> dict:
+def run_case(case: Case, cache: Path, peers: bool = True) -> dict:
     scans = sensed_scans(case, cache)
     tick = time.perf_counter()
     result = RadioSlam().run(scans)
     seconds = time.perf_counter() - tick
-    counts = {s.value: int(sum(st is s for st in result.status)) for s in ScanStatus}
+    skipped = {"kiss-icp": "skipped", "small-gicp": "skipped"}
     return {"case": case.name, "room": case.room.value, "motion": case.motion.value, "snr_db": case.snr_db,
             "poses": len(scans), "ate_m": ate_rmse(result.poses, case.scene.poses),
-            "ate_odometry_m": ate_rmse(result.odometry, case.scene.poses), "loops": len(result.loops),
+            "ate_odometry_m": ate_rmse(result.odometry, case.scene.poses), "loops": len(result.loop_closures),
             "tracking_lost": bool(result.tracking_lost), "ms_per_scan": float(np.median(result.seconds_per_scan) * 1e3),
-            "seconds": seconds, "status": counts, "peers": peer_front_ends(scans, case.scene.poses)}
+            "seconds": seconds, "status": result.status_counts(),
+            "peers": peer_front_ends(scans, case.scene.poses) if peers else skipped}
 
 
 def peer_front_ends(scans: list[Scan], truth: np.ndarray) -> dict:
@@ -174,10 +175,7 @@ def main() -> None:
         cases = [c for c in cases if args.only in c.name]
     with ProcessPoolExecutor(args.jobs) as pool:  # sense uncached cases in parallel
         list(pool.map(sensed_scans, cases, [args.cache] * len(cases)))
-    if args.no_peers:
-        global peer_front_ends
-        peer_front_ends = lambda scans, truth: {"kiss-icp": "skipped", "small-gicp": "skipped"}  # noqa: E731
-    rows = [run_case(c, args.cache) for c in cases]
+    rows = [run_case(c, args.cache, not args.no_peers) for c in cases]
     print(table(rows))
     print()
     print(summary(rows))

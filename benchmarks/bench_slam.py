@@ -22,8 +22,9 @@ from radioslam.scene import load_scene
 from radioslam.scene.procedural import MotionKind, RoomKind, generate_case
 from radioslam.sensing import Receiver
 from radioslam.sim import Simulator
-from radioslam.slam import RadioSlam, front_end, rotation_search
+from radioslam.slam import RadioSlam, front_end
 from radioslam.slam.branch_bound import BranchAndBound
+from radioslam.slam.rotation_search import HeadingSearch
 
 
 def sensed(scene, seed):
@@ -34,7 +35,6 @@ def sensed(scene, seed):
 def timed(scans, repeats):
     """Seconds per scan (all runs), per run, and the share spent in the front end's global search."""
     spent = [0.0]
-    candidates = rotation_search.rotation_candidates
 
     def clocked(function):
         def wrapper(*args, **kwargs):
@@ -48,8 +48,10 @@ def timed(scans, repeats):
     class FrontEndSearch(BranchAndBound):  # the front end's wide search only, not loop closure's
         search = clocked(BranchAndBound.search)
 
-    front_end.BranchAndBound = FrontEndSearch
-    front_end.rotation_candidates = clocked(candidates)
+    class FrontEndHeadings(HeadingSearch):  # its rotation candidates (histogram correlation)
+        headings = clocked(HeadingSearch.headings)
+
+    front_end.BranchAndBound, front_end.HeadingSearch = FrontEndSearch, FrontEndHeadings
     per_scan, per_run = [], []
     try:
         for _ in range(repeats):
@@ -58,7 +60,7 @@ def timed(scans, repeats):
             per_run.append(time.perf_counter() - t)
             per_scan.append(result.seconds_per_scan)
     finally:
-        front_end.BranchAndBound, front_end.rotation_candidates = BranchAndBound, candidates
+        front_end.BranchAndBound, front_end.HeadingSearch = BranchAndBound, HeadingSearch
     return np.concatenate(per_scan), per_run, spent[0] / sum(per_run)
 
 

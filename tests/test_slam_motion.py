@@ -72,8 +72,8 @@ def test_relocalization_finds_a_scan_taken_elsewhere_in_the_mapped_room():
 
     from radioslam.scene import load_scene
     from radioslam.scene.loader import scene_from_mapping, scene_to_yaml
-    from radioslam.slam.front_end import prepare_points
     from radioslam.slam.loop_closer import LoopCloser
+    from radioslam.slam.scan_points import prepare_points
     from radioslam.slam.se2 import between, compose
 
     base = load_scene("paper-cnv")
@@ -89,8 +89,8 @@ def test_relocalization_finds_a_scan_taken_elsewhere_in_the_mapped_room():
     frame = walk[0]
     estimates = {k: mapped.poses[k] for k in range(12)}
     for k in range(12):
-        closer.add(k, prepare_points(scans[k], cfg.scan))
-    found = closer.relocalize(12, prepare_points(scans[12], cfg.scan), estimates)
+        closer.add(k, prepare_points(scans[k], cfg.scan, cfg.grid))
+    found = closer.relocalize(12, prepare_points(scans[12], cfg.scan, cfg.grid), estimates)
     assert found is not None and found.relocalization
     placed = compose(estimates[found.anchor], found.relative)
     truth = between(frame, elsewhere[0])

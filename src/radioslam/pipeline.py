@@ -122,7 +122,7 @@ def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = 
     write_scan(run.map_cloud, fused, comment="fused map, world frame", xy=world)
     write_json(run.slam_summary, {
         "scan_status": [status.value for status in result.status],
-        "status_counts": status_counts(result.status),
+        "status_counts": result.status_counts(),
         "tracking_lost": result.tracking_lost,
         "lost_scans": result.lost_scans,
         "match_score": [None if np.isnan(v) else round(float(v), 4) for v in result.match_score],
@@ -139,11 +139,6 @@ def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = 
         "config": cfg.model_dump(mode="json"),
     })
     return result
-
-
-def status_counts(statuses: list[ScanStatus]) -> dict[str, int]:
-    """How many scans have each status (every status named, zeros included)."""
-    return {s.value: sum(x is s for x in statuses) for s in ScanStatus}
 
 
 def read_odometry(path: Path, scans: int) -> np.ndarray:

@@ -15,7 +15,7 @@ from radioslam.slam.config import MotionConfig, PoseGraphConfig
 from radioslam.slam.front_end import Step
 from radioslam.slam.loop_closer import LoopClosure
 from radioslam.slam.pose_graph import PoseGraph, local_covariance
-from radioslam.slam.se2 import between, compose
+from radioslam.slam.se2 import between, compose, pose_covariance
 
 
 class BackEnd:
@@ -23,7 +23,7 @@ class BackEnd:
         self.cfg = cfg
         self.graph = PoseGraph(prior_sigmas=np.array([cfg.prior_sigma_m, cfg.prior_sigma_m,
                                                       np.radians(cfg.prior_sigma_deg)]))
-        self.odometry_noise = np.diag([motion.odometry_sigma_m**2] * 2 + [np.radians(motion.odometry_sigma_deg) ** 2])
+        self.odometry_noise = pose_covariance(motion.odometry_sigma_m, motion.odometry_sigma_deg)
         self.estimates: dict[int, np.ndarray] = {}  # the latest solution, every pose so far
         self.chain: dict[int, np.ndarray] = {}  # the front end's steps composed: no loops, no optimization
         self.step_covariance: dict[int, np.ndarray] = {}  # each step's covariance in its previous pose's frame

@@ -54,12 +54,12 @@ class BranchAndBound:
         self.grid, self.levels = grid, levels
         self.pyramid = grid.pyramid(levels)
 
-    def _scores(self, cells, normals, theta, nodes, level):
+    def _scores(self, cells, normals, phasor, nodes, level):
         """Mean bound (N,) of nodes (angle index, ox, oy) at ``level``; exact with normals at 0.
-        ``theta`` holds the world-normal phasors (A, P) of the points at each heading."""
+        ``phasor`` holds the world-normal phasors (A, P) of the points at each heading."""
         a, ox, oy = nodes[:, 0], nodes[:, 1], nodes[:, 2]
         x, y = cells[a, :, 0] + ox[:, None], cells[a, :, 1] + oy[:, None]  # (N, P)
-        world_normal = theta[a] if level == 0 else None
+        world_normal = phasor[a] if level == 0 else None
         return self.grid.likelihood_at(x, y, ~np.isnan(normals), world_normal, self.pyramid[level]).mean(axis=1)
 
     def _children(self, nodes, level, reach):
@@ -84,25 +84,26 @@ class BranchAndBound:
         on discounted scores can pick, and no more)."""
         res = self.grid.resolution
         reach = int(np.ceil(window_m / res))
-        centre = np.array([centre[0], centre[1], 0.0])
-        cells = heading_cells(self.grid, points, centre[:2], headings)
-        theta = phasors(headings[:, None] + normals[None, :])  # (A, P) world normals, once per heading
+        cells = heading_cells(self.grid, points, centre, headings)
+        phasor = phasors(headings[:, None] + normals[None, :])  # (A, P) world normals, once per heading
         top = 2**self.levels
         starts = np.arange(-reach, reach + 1, top)
         ga, gx, gy = np.meshgrid(np.arange(len(headings)), starts, starts, indexing="ij")
         nodes = np.stack([ga.ravel(), gx.ravel(), gy.ravel()], axis=1).astype(np.int32)
         exhaustive = len(headings) * (2 * reach + 1) ** 2
-        def pose_of(node):
-            return np.array([centre[0] + res * node[1], centre[1] + res * node[2], headings[node[0]]])
+
+        def poses_of(leaves):  # (N, 3) world poses of leaf nodes (angle index, ox, oy)
+            return np.stack([centre[0] + leaves[:, 1] * res, centre[1] + leaves[:, 2] * res,
+                             wrap_angle(headings[leaves[:, 0]])], axis=1)
 
         threshold, evaluated = min_score, 0
         for level in range(self.levels, -1, -1):
-            bound = self._scores(cells, normals, theta, nodes, level)
+            bound = self._scores(cells, normals, phasor, nodes, level)
             evaluated += len(nodes)
             if level > 0:
-                leaf, greedy = self._greedy(cells, normals, theta, nodes[np.argmax(bound)], level, reach)
+                leaf, greedy = self._greedy(cells, normals, phasor, nodes[np.argmax(bound)], level, reach)
                 if discount is not None and leaf is not None:
-                    greedy *= 1.0 - float(discount(pose_of(leaf)[None])[0])
+                    greedy *= 1.0 - float(discount(poses_of(leaf[None]))[0])
                 threshold = max(threshold, keep_ratio * greedy)
             kept = bound >= threshold
             nodes, bound = nodes[kept], bound[kept]
@@ -110,23 +111,22 @@ class BranchAndBound:
                 return BranchBoundResult(None, 0.0, evaluated, exhaustive)
             if level > 0:
                 nodes = self._children(nodes, level, reach)
-        a, ox, oy = nodes[:, 0], nodes[:, 1], nodes[:, 2]
-        poses = np.stack([centre[0] + ox * res, centre[1] + oy * res, wrap_angle(headings[a])], axis=1)
+        poses = poses_of(nodes)
         judged = bound if discount is None else bound * (1.0 - discount(poses))
         order = np.argsort(-judged, kind="stable")
         order = order[bound[order] >= keep_ratio * judged[order[0]]]
         return BranchBoundResult(poses[order[0]], float(bound[order[0]]), evaluated, exhaustive, poses[order],
                                  bound[order])
 
-    def _greedy(self, cells, normals, theta, node, level, reach) -> tuple[np.ndarray | None, float]:
+    def _greedy(self, cells, normals, phasor, node, level, reach) -> tuple[np.ndarray | None, float]:
         """The leaf reached by always taking the best child, and its score: a reachable lower bound."""
         nodes = node[None]
         for h in range(level, 0, -1):
             nodes = self._children(nodes, h, reach)
             if len(nodes) == 0:
                 return None, 0.0
-            nodes = nodes[[np.argmax(self._scores(cells, normals, theta, nodes, h - 1))]]
-        return nodes[0], float(self._scores(cells, normals, theta, nodes, 0)[0])
+            nodes = nodes[[np.argmax(self._scores(cells, normals, phasor, nodes, h - 1))]]
+        return nodes[0], float(self._scores(cells, normals, phasor, nodes, 0)[0])
 
 
 def distinct(poses: np.ndarray, scores: np.ndarray, radius_m: float, radius_rad: float,

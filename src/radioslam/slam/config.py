@@ -140,7 +140,7 @@ class LoopClosureConfig(_Section):
     # as a cross aisle, and keeps the prediction): every submap, full rotation, translation over its extent
     relocalize_after: int = Field(2, ge=1)
     relocalize_min_score: float = Field(0.35, ge=0, le=1)
-    relocalize_margin_m: float = Field(2.0, ge=0)  # beyond the submap's points
+    relocalize_margin_m: float = Field(2.0, ge=0)  # beyond the map's points
     relocalize_levels: int = Field(6, ge=1, le=10)  # branch-and-bound levels for a search that wide
     # a matched scan with this fraction of its points on known free space is searched for too, and
     # relocalized where it scores relocalize_gain better than its local match

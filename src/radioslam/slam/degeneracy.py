@@ -40,6 +40,12 @@ class DegeneracyTest:
     neighbours: int  # the point itself and up to neighbours − 1 others
     inlier_sigmas: float  # a point within this many σ of the map agrees with it
 
+    @classmethod
+    def from_config(cls, cfg) -> "DegeneracyTest":
+        """From a :class:`~radioslam.slam.config.SlamConfig`."""
+        return cls(cfg.front_end.degenerate_ratio, cfg.scan.neighbour_radius_m, cfg.scan.neighbours,
+                   cfg.scan.inlier_sigmas)
+
     def weak(self, points: np.ndarray, normals: np.ndarray, heading: float,
              covariance: np.ndarray) -> np.ndarray | None:
         return weak_direction(points, normals, heading, covariance, self.max_ratio, self.neighbour_radius,

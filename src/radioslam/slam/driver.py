@@ -19,8 +19,9 @@ from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.back_end import BackEnd
 from radioslam.slam.config import SlamConfig
 from radioslam.slam.errors import SlamError
-from radioslam.slam.front_end import FrontEnd, Step, prepare_points
+from radioslam.slam.front_end import FrontEnd, Step
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
+from radioslam.slam.scan_points import prepare_points
 from radioslam.slam.status import ScanStatus
 
 
@@ -33,19 +34,21 @@ class SlamResult:
     loops: list[LoopClosure] = field(default_factory=list)  # relocalizations included
     warnings: list[str] = field(default_factory=list)
     seconds_per_scan: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    lost_after: int = 2  # this many consecutive predicted scans are a lost stretch
 
     def scans_with(self, status: ScanStatus) -> list[int]:
         return [k for k, s in enumerate(self.status) if s is status]
 
-    lost_after: int = 2  # this many consecutive predicted scans are a lost stretch
+    def status_counts(self) -> dict[str, int]:
+        """How many scans have each status (every status named, zeros included)."""
+        return {s.value: len(self.scans_with(s)) for s in ScanStatus}
 
     @property
     def lost_scans(self) -> list[int]:
         """Scans of the stretches of at least ``lost_after`` consecutive scans whose poses rest on
         the motion model alone (one predicted scan between matched ones is a new view, not lost)."""
-        lost = np.array([s.lost for s in self.status] + [False])
-        edges = np.flatnonzero(np.diff(np.concatenate([[0], lost.astype(int)])))
-        runs = edges.reshape(-1, 2) if len(edges) % 2 == 0 else np.zeros((0, 2), int)
+        lost = np.array([0] + [int(s.lost) for s in self.status] + [0])
+        runs = np.flatnonzero(np.diff(lost)).reshape(-1, 2)  # (start, end) of each stretch: 0 on both sides
         return [k for a, b in runs if b - a >= self.lost_after for k in range(a, b)]
 
     @property
@@ -88,19 +91,19 @@ class RadioSlam:
             BackEnd.from_config(cfg)
         steps: list[Step] = []
         seconds, lost = [], 0  # lost: consecutive scans nothing matched
-        drop = Contradiction(cfg.loop_closure.contradicted_fraction, cfg.loop_closure.relocalize_gain)
+        contradiction = Contradiction(cfg.loop_closure.contradicted_fraction, cfg.loop_closure.relocalize_gain)
         for k, scan in enumerate(scans):
             tick = time.perf_counter()
             # 1. the scan's points and the specular normal of the wall each came from
-            points = prepare_points(scan, cfg.scan)
+            points = prepare_points(scan, cfg.scan, cfg.grid)
             # 2. register it against the local map: the motion's hypotheses and the scan's own rotation candidates
             step = front_end.register(k, points, back_end.estimates)
             # 3. a lost scan (one of a stretch nothing matched, or one whose match puts points on space the map
             #    saw through) is searched for in the whole map: relocalized where the map explains it far better
             lost = lost + 1 if step.status is ScanStatus.PREDICTED else 0
-            suspect = lost >= cfg.loop_closure.relocalize_after or drop.suspicious(step)
+            suspect = lost >= cfg.loop_closure.relocalize_after or contradiction.suspicious(step)
             found = loop_closer.relocalize(k, points, back_end.estimates, k - lost) if suspect else None
-            if found is not None and (step.status is ScanStatus.PREDICTED or drop.better(found.score, step)):
+            if found is not None and (step.status is ScanStatus.PREDICTED or contradiction.better(found.score, step)):
                 step = front_end.relocalized(back_end.relocalized_pose(found), found.score)
             # 4. the pose and the factors tying it to the previous one into the pose graph
             back_end.add(k, step, front_end.motion.odometry_step(k))

@@ -21,37 +21,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from radioslam.sensing.pointcloud import Scan
-from radioslam.slam.branch_bound import BranchAndBound, distinct, window_angles
+from radioslam.slam.branch_bound import BranchAndBound, distinct
 from radioslam.slam.config import FrontEndConfig, GridConfig, MotionConfig, ScanConfig
 from radioslam.slam.correlative import candidate_likelihoods, correlative_match
 from radioslam.slam.degeneracy import DegeneracyTest, remap
-from radioslam.slam.free_space import free_samples
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.motion import Hypothesis, MotionHypothesis, MotionModel
-from radioslam.slam.normals import specular_normals, wall_points
 from radioslam.slam.refine import fit_score, refine_pose
-from radioslam.slam.rotation_search import merge_headings, rotation_candidates
-from radioslam.slam.se2 import between, transform_points, wrap_angle
+from radioslam.slam.rotation_search import HeadingSearch
+from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points
+from radioslam.slam.se2 import between, pose_covariance, wrap_angle
 from radioslam.slam.status import ScanStatus
-from radioslam.slam.submap import fused_points
-
-
-@dataclass(frozen=True)
-class ScanPoints:
-    """A scan as the matchers see it: terminal-frame points and specular normal bearings."""
-
-    xy: np.ndarray  # (P, 2)
-    normals: np.ndarray  # (P,) NaN: no normal known
-
-    def __len__(self) -> int:
-        return len(self.xy)
-
-
-def prepare_points(scan: Scan, cfg: ScanConfig) -> ScanPoints:
-    """The scan's points with the specular normal of the arc each came from."""
-    phi = specular_normals(scan, cfg.arc_range_m)
-    return ScanPoints(wall_points(scan, phi) if cfg.project_arcs else scan.xy, phi)
 
 
 @dataclass(frozen=True)
@@ -85,22 +65,20 @@ class FrontEnd:
     """Built from plain settings by :meth:`from_config`; ``register`` then ``update`` per scan."""
 
     def __init__(self, grid: GridConfig, scan: ScanConfig, cfg: FrontEndConfig, motion_cfg: MotionConfig,
-                 motion: MotionModel):
+                 motion: MotionModel, degeneracy: DegeneracyTest):
         self.grid_cfg, self.scan_cfg, self.cfg, self.motion_cfg, self.motion = grid, scan, cfg, motion_cfg, motion
-        self.degeneracy = DegeneracyTest(cfg.degenerate_ratio, scan.neighbour_radius_m, scan.neighbours,
-                                         scan.inlier_sigmas)
+        self.degeneracy = degeneracy
         self.step_rad = np.radians(cfg.angle_step_deg)
-        self.floor = np.diag([cfg.floor_sigma_m**2] * 2 + [np.radians(cfg.floor_sigma_deg) ** 2])
-        m = motion_cfg
-        self.predicted = np.diag([m.predicted_sigma_m**2] * 2 + [np.radians(m.predicted_sigma_deg) ** 2])
+        self.heading_search = HeadingSearch.from_config(cfg)
+        self.floor = pose_covariance(cfg.floor_sigma_m, cfg.floor_sigma_deg)
+        self.predicted = pose_covariance(motion_cfg.predicted_sigma_m, motion_cfg.predicted_sigma_deg)
         self.keys: list[int] = []  # scans of the local map, oldest first
         self.points: dict[int, ScanPoints] = {}
-        self.free: dict[int, np.ndarray] = {}  # terminal-frame free-space samples of each scan
 
     @classmethod
     def from_config(cls, cfg, odometry: np.ndarray | None = None) -> "FrontEnd":
         motion = MotionModel(cfg.motion.pace_scans, np.radians(cfg.motion.straight_deg), odometry)
-        return cls(cfg.grid, cfg.scan, cfg.front_end, cfg.motion, motion)
+        return cls(cfg.grid, cfg.scan, cfg.front_end, cfg.motion, motion, DegeneracyTest.from_config(cfg))
 
     def register(self, k: int, points: ScanPoints, estimates: dict[int, np.ndarray]) -> Step:
         """Scan k's pose; ``estimates`` holds every earlier pose (the latest solution)."""
@@ -120,12 +98,9 @@ class FrontEnd:
         hypotheses = self.motion.hypotheses(k, last)
         primary = hypotheses[0].pose
         # every heading the scan's normals or the motion suggest, over every translation within a step
-        headings = merge_headings(np.concatenate([[h.pose[2] for h in hypotheses], rotation_candidates(
-            phi, map_normals, np.radians(cfg.histogram_bin_deg), np.radians(cfg.histogram_smooth_deg),
-            cfg.rotation_candidates)]), np.radians(cfg.rotation_window_deg))
-        offsets = window_angles(np.radians(cfg.rotation_window_deg), self.step_rad)
+        headings = self.heading_search.headings(phi, map_normals, [h.pose[2] for h in hypotheses])
         found = BranchAndBound(grid, self.grid_cfg.branch_levels).search(
-            xy, phi, last[:2], (headings[:, None] + offsets[None, :]).ravel(), self.motion_cfg.max_step_m, 0.0,
+            xy, phi, last[:2], headings, self.motion_cfg.max_step_m, 0.0,
             1.0 - cfg.ambiguity_margin - cfg.lattice_allowance, lambda poses: self._prior_discount(poses, hypotheses))
         if found.pose is None:
             return Step(primary, self.predicted, ScanStatus.PREDICTED, 0.0, note="nothing in the local map matches")
@@ -201,11 +176,10 @@ class FrontEnd:
         """The likelihood field of the local map's scans at their latest poses (world frame), and the
         map points' world normals."""
         keys = self.local_map_keys(estimates)
-        xy, normals = fused_points(keys, estimates, {m: self.points[m].xy for m in keys},
-                                   {m: self.points[m].normals for m in keys}, np.zeros(3))
+        xy, normals = fused_points(keys, estimates, self.points, np.zeros(3))
         g = self.grid_cfg
         margin = self.motion_cfg.max_step_m + self.cfg.window_m + 3 * g.sigma_m
-        free = np.concatenate([transform_points(estimates[m], self.free[m]) for m in keys])
+        free = fused_free(keys, estimates, self.points)
         grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, normals,
                                           np.radians(g.normal_sigma_deg), g.plane_reach_m, free, g.free_penalty)
         return grid, normals
@@ -228,9 +202,6 @@ class FrontEnd:
         if step.status is not ScanStatus.SKIPPED:
             self.keys.append(k)
             self.points[k] = points
-            g = self.grid_cfg
-            self.free[k] = free_samples(points.xy, points.normals, g.free_stop_m, g.free_pose_radius_m,
-                                        g.resolution_m / 2)
         jumped = previous is None or step.status is ScanStatus.RELOCALIZED
         self.motion.update(None if jumped else between(previous, step.pose),
                            observed=step.status is ScanStatus.MATCHED)
@@ -238,5 +209,5 @@ class FrontEnd:
     def relocalized(self, pose: np.ndarray, score: float) -> Step:
         """The step of a lost scan that the loop closer found again at ``pose``."""
         m = self.motion_cfg  # next to no information about the jump itself: the relocalization fixes the pose
-        jump = np.diag([m.relocalized_sigma_m**2] * 2 + [np.radians(m.relocalized_sigma_deg) ** 2])
-        return Step(pose, jump, ScanStatus.RELOCALIZED, score, note="lost, relocalized against the submaps")
+        jump = pose_covariance(m.relocalized_sigma_m, m.relocalized_sigma_deg)
+        return Step(pose, jump, ScanStatus.RELOCALIZED, score, note="lost, relocalized against the whole map")

@@ -29,16 +29,9 @@ import numpy as np
 from scipy.ndimage import distance_transform_edt
 
 from radioslam.slam.errors import SlamError
-from radioslam.slam.se2 import wrap_angle
 
 # a point farther than 3σ from the map counts as this likely (log-likelihood floor)
 LIKELIHOOD_FLOOR = float(np.exp(-4.5))
-
-
-def normal_likelihood(map_normal: np.ndarray, point_normal: np.ndarray, sigma: float) -> np.ndarray:
-    """exp(−Δψ²/2σ²) of the normals' difference; 1 where either is unknown (NaN)."""
-    delta = wrap_angle(point_normal - map_normal)
-    return np.where(np.isnan(delta), 1.0, np.exp(-0.5 * (np.nan_to_num(delta) / sigma) ** 2))
 
 
 def phasors(angles: np.ndarray) -> np.ndarray:

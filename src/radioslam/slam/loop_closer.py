@@ -31,18 +31,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from radioslam.slam.branch_bound import BranchAndBound, distinct, window_angles
+from radioslam.slam.branch_bound import BranchAndBound, distinct
 from radioslam.slam.config import FrontEndConfig, GridConfig, LoopClosureConfig
 from radioslam.slam.correlative import correlative_match
 from radioslam.slam.degeneracy import DegeneracyTest
-from radioslam.slam.free_space import free_samples
-from radioslam.slam.front_end import ScanPoints
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.pose_graph import local_covariance
 from radioslam.slam.refine import fit_score, refine_pose
-from radioslam.slam.rotation_search import merge_headings, rotation_candidates
-from radioslam.slam.se2 import between, transform_points, wrap_angle
-from radioslam.slam.submap import Submap, fused_points
+from radioslam.slam.rotation_search import HeadingSearch
+from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points
+from radioslam.slam.se2 import between, pose_covariance, wrap_angle
+from radioslam.slam.submap import Submap
 
 
 @dataclass(frozen=True)
@@ -76,21 +75,16 @@ class LoopCloser:
     degeneracy: DegeneracyTest
     submaps: list[Submap] = field(default_factory=list)
     points: dict[int, ScanPoints] = field(default_factory=dict)
-    free: dict[int, np.ndarray] = field(default_factory=dict)  # terminal-frame free-space samples per scan
-    matchers: dict[tuple[int, int], tuple[int, BranchAndBound]] = field(default_factory=dict)
+    matchers: dict[int, tuple[int, BranchAndBound]] = field(default_factory=dict)  # anchor → (solution, matcher)
 
     @property
     def floor(self) -> np.ndarray:
         """The front end's covariance floor: a loop's response surface is as over-confident."""
-        f = self.front_cfg
-        return np.diag([f.floor_sigma_m**2] * 2 + [np.radians(f.floor_sigma_deg) ** 2])
+        return pose_covariance(self.front_cfg.floor_sigma_m, self.front_cfg.floor_sigma_deg)
 
     @classmethod
     def from_config(cls, cfg) -> "LoopCloser":
-        f = cfg.front_end
-        test = DegeneracyTest(f.degenerate_ratio, cfg.scan.neighbour_radius_m, cfg.scan.neighbours,
-                              cfg.scan.inlier_sigmas)
-        return cls(cfg.grid, cfg.loop_closure, f, test)
+        return cls(cfg.grid, cfg.loop_closure, cfg.front_end, DegeneracyTest.from_config(cfg))
 
     def add(self, k: int, points: ScanPoints) -> None:
         """Scan k joins the current submap (a new one every ``submap_scans`` scans)."""
@@ -98,22 +92,19 @@ class LoopCloser:
             self.submaps.append(Submap())
         self.submaps[-1].keys.append(k)
         self.points[k] = points
-        g = self.grid_cfg
-        self.free[k] = free_samples(points.xy, points.normals, g.free_stop_m, g.free_pose_radius_m, g.resolution_m / 2)
 
     def _grid(self, submap: Submap, estimates, margin: float) -> LikelihoodGrid:
         g = self.grid_cfg
-        xy, nrm = fused_points(submap.keys, estimates, {m: self.points[m].xy for m in submap.keys},
-                               {m: self.points[m].normals for m in submap.keys}, estimates[submap.anchor])
+        xy, nrm = fused_points(submap.keys, estimates, self.points, estimates[submap.anchor])
         return LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, nrm, np.radians(g.normal_sigma_deg),
                                           self.cfg.plane_reach_m)
 
-    def _matcher(self, submap: Submap, estimates, version: int, margin: float, levels: int) -> BranchAndBound:
+    def _matcher(self, submap: Submap, estimates, version: int, margin: float) -> BranchAndBound:
         """The submap's matcher for this pose-graph solution (built once per solution)."""
-        key = (submap.anchor, levels)
-        if self.matchers.get(key, (None,))[0] != version:
-            self.matchers[key] = (version, BranchAndBound(self._grid(submap, estimates, margin), levels))
-        return self.matchers[key][1]
+        if self.matchers.get(submap.anchor, (None,))[0] != version:
+            grid = self._grid(submap, estimates, margin)
+            self.matchers[submap.anchor] = (version, BranchAndBound(grid, self.grid_cfg.branch_levels))
+        return self.matchers[submap.anchor][1]
 
     def close(self, k: int, estimates: dict[int, np.ndarray], version: int,
               drift: Callable[[int, int, float], np.ndarray]) -> list[LoopClosure]:
@@ -126,7 +117,7 @@ class LoopCloser:
             members = np.array([estimates[m][:2] for m in s.keys])
             if np.min(np.linalg.norm(members - current[:2], axis=1)) > self.cfg.radius_m:
                 continue
-            matcher = self._matcher(s, estimates, version, margin, self.grid_cfg.branch_levels)
+            matcher = self._matcher(s, estimates, version, margin)
             predicted = between(estimates[s.anchor], current)
             loop = self._match(matcher, self.points[k], predicted, drift(s.anchor, k, np.linalg.norm(predicted[:2])),
                                s.anchor, k)
@@ -172,20 +163,14 @@ class LoopCloser:
         keys = [m for m in self.points if m != k and (before is None or m < before)]
         if not keys:
             return None
-        xy, normals = fused_points(keys, estimates, {m: self.points[m].xy for m in keys},
-                                   {m: self.points[m].normals for m in keys}, np.zeros(3))
-        free = np.concatenate([transform_points(estimates[m], self.free[m]) for m in keys])
+        xy, normals = fused_points(keys, estimates, self.points, np.zeros(3))
         grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, c.relocalize_margin_m, normals,
-                                          np.radians(g.normal_sigma_deg), g.plane_reach_m, free, g.free_penalty)
+                                          np.radians(g.normal_sigma_deg), g.plane_reach_m,
+                                          fused_free(keys, estimates, self.points), g.free_penalty)
         lo, hi = grid.origin, grid.origin + np.array(grid.values.shape) * grid.resolution
-        headings = merge_headings(rotation_candidates(points.normals, normals, np.radians(f.histogram_bin_deg),
-                                                      np.radians(f.histogram_smooth_deg), f.rotation_candidates),
-                                  np.radians(f.rotation_window_deg))
-        if len(headings) == 0:  # no normals to suggest a heading: every one
-            headings = np.arange(0.0, 2 * np.pi, 2 * np.radians(f.rotation_window_deg))
-        offsets = window_angles(np.radians(f.rotation_window_deg), np.radians(f.angle_step_deg))
+        headings = HeadingSearch.from_config(f).headings(points.normals, normals)
         found = BranchAndBound(grid, c.relocalize_levels).search(
-            points.xy, points.normals, 0.5 * (lo + hi), (headings[:, None] + offsets).ravel(),
+            points.xy, points.normals, 0.5 * (lo + hi), headings,
             0.5 * float(np.max(hi - lo)), c.relocalize_min_score, 1.0 - f.ambiguity_margin - f.lattice_allowance)
         if found.pose is None:
             return None

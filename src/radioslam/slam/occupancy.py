@@ -41,13 +41,13 @@ def occupancy_grid(poses: np.ndarray, scans_xy: list[np.ndarray], cfg) -> Occupa
     log_odds = np.zeros(shape)
     hits, rays = end[: len(end) - len(poses)], start[: len(end) - len(poses)]
     if len(hits):
-        length = np.maximum(np.linalg.norm(hits - rays, axis=1) - cfg.free_stop_m, 0.0)
+        distance = np.linalg.norm(hits - rays, axis=1)
+        length = np.maximum(distance - cfg.free_stop_m, 0.0)  # cleared up to free_stop_m short of the echo
         samples = np.ceil(length / (resolution / 2)).astype(int)
         ray = np.repeat(np.arange(len(hits)), samples)
         frac = (np.arange(samples.sum()) - np.repeat(np.cumsum(samples) - samples, samples)) / np.maximum(
             samples[ray], 1)
-        length_ray = np.linalg.norm(hits - rays, axis=1)
-        direction = (hits - rays) / np.maximum(length_ray, 1e-12)[:, None]
+        direction = (hits - rays) / np.maximum(distance, 1e-12)[:, None]
         along = rays[ray] + (frac * length[ray])[:, None] * direction[ray]
         free = np.floor((along - origin) / resolution).astype(int)
         hit = np.ravel_multi_index(np.floor((hits - origin) / resolution).astype(int).T, shape)

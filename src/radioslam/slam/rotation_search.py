@@ -17,9 +17,13 @@ a translation search against the map decides between them.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.fft
 
+from radioslam.slam.branch_bound import window_angles
+from radioslam.slam.config import FrontEndConfig
 from radioslam.slam.se2 import wrap_angle
 
 
@@ -67,3 +71,29 @@ def merge_headings(headings: np.ndarray, width: float) -> np.ndarray:
         if all(abs(wrap_angle(h - o)) > width for o in out):
             out.append(float(h))
     return np.array(out)
+
+
+@dataclass(frozen=True)
+class HeadingSearch:
+    """The headings a wide search tries: the correlation's candidates and any suggested ones (the
+    motion's hypotheses), merged within ±window, each searched ±window in ``step`` (every heading
+    where neither the normals nor a suggestion gives one)."""
+
+    bin_rad: float
+    smooth_rad: float
+    count: int
+    window_rad: float
+    step_rad: float
+
+    @classmethod
+    def from_config(cls, cfg: FrontEndConfig) -> "HeadingSearch":
+        return cls(np.radians(cfg.histogram_bin_deg), np.radians(cfg.histogram_smooth_deg), cfg.rotation_candidates,
+                   np.radians(cfg.rotation_window_deg), np.radians(cfg.angle_step_deg))
+
+    def headings(self, scan_normals: np.ndarray, map_normals: np.ndarray, suggested=()) -> np.ndarray:
+        """The headings (A,) to search, centres first, each with its window of offsets."""
+        found = rotation_candidates(scan_normals, map_normals, self.bin_rad, self.smooth_rad, self.count)
+        centres = merge_headings(np.concatenate([np.asarray(suggested, dtype=np.float64), found]), self.window_rad)
+        if len(centres) == 0:
+            centres = np.arange(0.0, 2 * np.pi, 2 * self.window_rad)
+        return (centres[:, None] + window_angles(self.window_rad, self.step_rad)[None, :]).ravel()

@@ -41,3 +41,8 @@ def transform_points(pose: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Points (P, 2) of a frame at ``pose`` into the parent frame."""
     c, s = np.cos(pose[2]), np.sin(pose[2])
     return points @ np.array([[c, s], [-s, c]]) + np.asarray(pose[:2])
+
+
+def pose_covariance(sigma_m: float, sigma_deg: float) -> np.ndarray:
+    """Diagonal covariance (3, 3) of an (x, y, θ) pose: ``sigma_m`` on each axis, ``sigma_deg`` in θ."""
+    return np.diag([sigma_m**2, sigma_m**2, np.radians(sigma_deg) ** 2])

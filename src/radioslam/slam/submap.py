@@ -5,10 +5,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numpy as np
-
-from radioslam.slam.se2 import between, transform_points
-
 
 @dataclass
 class Submap:
@@ -17,12 +13,3 @@ class Submap:
     @property
     def anchor(self) -> int:
         return self.keys[0]
-
-
-def fused_points(keys: list[int], poses: dict[int, np.ndarray], points: dict[int, np.ndarray],
-                 normals: dict[int, np.ndarray], frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The scans' points (P, 2) and world-frame normals (P,) in the frame of the pose ``frame``."""
-    rel = [between(frame, poses[k]) for k in keys]
-    xy = np.concatenate([transform_points(r, points[k]) for r, k in zip(rel, keys)])
-    nrm = np.concatenate([normals[k] + r[2] for r, k in zip(rel, keys)])
-    return xy, nrm

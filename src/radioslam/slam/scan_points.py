@@ -1,0 +1,47 @@
+"""A radio scan as the matchers see it (paper §IV-A): terminal-frame points, the specular normal
+of the arc each came from (:mod:`radioslam.slam.normals`), and the free space the scan shows
+(:mod:`radioslam.slam.free_space`), computed once per scan for the front end and the loop closer."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from radioslam.sensing.pointcloud import Scan
+from radioslam.slam.config import GridConfig, ScanConfig
+from radioslam.slam.free_space import free_samples
+from radioslam.slam.normals import specular_normals, wall_points
+from radioslam.slam.se2 import between, transform_points
+
+
+@dataclass(frozen=True)
+class ScanPoints:
+    xy: np.ndarray  # (P, 2)
+    normals: np.ndarray  # (P,) NaN: no normal known
+    free: np.ndarray  # (F, 2) terminal-frame samples of the space the scan saw through
+
+    def __len__(self) -> int:
+        return len(self.xy)
+
+
+def prepare_points(scan: Scan, cfg: ScanConfig, grid: GridConfig) -> ScanPoints:
+    """The scan's points with their specular normals and its free-space samples (half a cell apart)."""
+    phi = specular_normals(scan, cfg.arc_range_m)
+    xy = wall_points(scan, phi) if cfg.project_arcs else scan.xy
+    return ScanPoints(xy, phi, free_samples(xy, phi, grid.free_stop_m, grid.free_pose_radius_m,
+                                            grid.resolution_m / 2))
+
+
+def fused_points(keys: list[int], poses: dict[int, np.ndarray], scans: dict[int, ScanPoints],
+                 frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The scans' points (P, 2) and world-frame normals (P,) in the frame of the pose ``frame``."""
+    rel = [between(frame, poses[k]) for k in keys]
+    xy = np.concatenate([transform_points(r, scans[k].xy) for r, k in zip(rel, keys)])
+    nrm = np.concatenate([scans[k].normals + r[2] for r, k in zip(rel, keys)])
+    return xy, nrm
+
+
+def fused_free(keys: list[int], poses: dict[int, np.ndarray], scans: dict[int, ScanPoints]) -> np.ndarray:
+    """The scans' free-space samples (F, 2) in the world frame."""
+    return np.concatenate([transform_points(poses[k], scans[k].free) for k in keys])
