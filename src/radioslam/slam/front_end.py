@@ -142,12 +142,13 @@ class FrontEnd:
                     f"{np.degrees(np.arctan2(weak[1], weak[0])):.0f}° (predicted instead)")
         if len(rivals):
             status = ScanStatus.AMBIGUOUS
+            note = "; ".join(filter(None, [note, f"ambiguous: {len(rivals)} other pose(s) score within "
+                                                 f"{cfg.ambiguity_margin:.0%}"]))
         if len(undecided):
             # neither the scan nor the motion can decide: widen the covariance over the poses left
             spread = undecided - pose
             spread[:, 2] = wrap_angle(spread[:, 2])
             cov = cov + spread.T @ spread / len(undecided)
-            note = f"ambiguous: {len(rivals)} other pose(s) score within {cfg.ambiguity_margin:.0%}"
         if weight < 1.0:
             pose, cov = fuse(pose, cov, weight, primary, self.predicted)
         return Step(pose, cov, status, score, rivals, note, contradicted)
