@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from radioslam.eval.trajectory_metrics import ate_rmse
-from radioslam.scene import scene_to_yaml
+from radioslam.scene import Scene, scene_to_yaml
 from radioslam.scene.procedural import Case, robustness_suite
 from radioslam.sensing import Receiver
 from radioslam.sensing.pointcloud import Scan
@@ -34,17 +34,17 @@ FIELDS = ("range_m", "angle_rad", "power_db", "beam", "orientation")
 SUCCESS_M, LOST_M = 0.2, 1.0
 
 
-def cache_file(case: Case, cache: Path) -> Path:
-    key = hashlib.sha1(scene_to_yaml(case.scene).encode()).hexdigest()[:16]
-    return cache / f"{case.name}-{key}.npz"
+def cache_file(scene: Scene, seed: int, cache: Path) -> Path:
+    key = hashlib.sha1(scene_to_yaml(scene).encode() + str(seed).encode()).hexdigest()[:16]
+    return cache / f"{scene.name}-{key}.npz"
 
 
-def sensed_scans(case: Case, cache: Path) -> list[Scan]:
-    """The case's scans, simulated and sensed once (seed = the case's seed), then from the cache."""
-    path = cache_file(case, cache)
+def cached_scans(scene: Scene, seed: int, cache: Path) -> list[Scan]:
+    """The scene's scans, simulated and sensed once (with the true hardware delay), then from the cache."""
+    path = cache_file(scene, seed, cache)
     if not path.exists():
-        receiver = Receiver(case.scene.radio, case.scene.radio.hardware_delay_s)
-        scans = [receiver.sense(c).scan for c in Simulator.from_scene(case.scene).simulate(case.seed)]
+        receiver = Receiver(scene.radio, scene.radio.hardware_delay_s)
+        scans = [receiver.sense(c).scan for c in Simulator.from_scene(scene).simulate(seed)]
         arrays = {f"{k}_{f}": getattr(s, f) for k, s in enumerate(scans) for f in FIELDS}
         cache.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(".tmp.npz")
@@ -52,6 +52,11 @@ def sensed_scans(case: Case, cache: Path) -> list[Scan]:
         tmp.rename(path)
     with np.load(path) as data:
         return [Scan(*(data[f"{k}_{f}"] for f in FIELDS)) for k in range(int(data["count"]))]
+
+
+def sensed_scans(case: Case, cache: Path) -> list[Scan]:
+    """The case's scans (seed = the case's seed)."""
+    return cached_scans(case.scene, case.seed, cache)
 
 
 def run_case(case: Case, cache: Path, peers: bool = True) -> dict:

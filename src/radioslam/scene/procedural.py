@@ -265,3 +265,41 @@ def robustness_suite(runs: int = 40, seed: int = 0) -> list[Case]:
             room = RoomKind.HALL
         cases.append(generate_case(room, motion, seed * 1000 + i))
     return cases
+
+
+@dataclass(frozen=True)
+class Kidnap:
+    """A scene whose terminal was carried elsewhere for ``length`` scans from scan ``start``."""
+
+    scene: Scene
+    start: int
+    length: int
+
+    @property
+    def kidnapped(self) -> np.ndarray:
+        """(P,) True on the scans taken elsewhere."""
+        mask = np.zeros(len(self.scene.poses), bool)
+        mask[self.start: self.start + self.length] = True
+        return mask
+
+
+def kidnapped(scene: Scene, rng: np.random.Generator, length: int = 5, min_distance_m: float = 3.0) -> Kidnap:
+    """The kidnapped-terminal case of issue #12: from the middle of the walk, ``length`` scans are
+    taken elsewhere in the room, then the walk resumes where it was left. "Elsewhere" is a stretch
+    of the walk's own earlier poses (so clear of every wall and inside the mapped room) starting at
+    least ``min_distance_m`` from where the terminal was taken, turned by a random heading."""
+    poses = scene.poses
+    start = len(poses) // 2
+    here = poses[start - 1, :2]
+    origins = np.arange(0, start - length)
+    far = origins[np.linalg.norm(poses[origins, :2] - here, axis=1) >= min_distance_m]
+    if not len(far):
+        raise ValueError(f"{scene.name}: no earlier pose {min_distance_m} m from scan {start}")
+    origin = int(rng.choice(far))
+    elsewhere = poses[origin: origin + length].copy()
+    elsewhere[:, 2] = np.angle(np.exp(1j * (elsewhere[:, 2] + rng.uniform(-np.pi, np.pi))))
+    walk = np.vstack([poses[:start], elsewhere, poses[start:]])
+    data = scene.spec.model_dump(mode="json", exclude_none=True)
+    data["name"] = f"{scene.name}-kidnapped"
+    data["trajectory"] = {"poses": np.round(walk, 6).tolist()}
+    return Kidnap(scene_from_mapping(data, f"kidnapped:{scene.name}"), start, length)

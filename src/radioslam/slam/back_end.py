@@ -13,7 +13,7 @@ import numpy as np
 
 from radioslam.slam.config import MotionConfig, PoseGraphConfig
 from radioslam.slam.front_end import Step
-from radioslam.slam.loop_closer import LoopClosure
+from radioslam.slam.loop_closer import LoopCloser, LoopClosure
 from radioslam.slam.pose_graph import PoseGraph, local_covariance
 from radioslam.slam.se2 import between, compose, pose_covariance
 
@@ -24,6 +24,8 @@ class BackEnd:
         self.graph = PoseGraph(prior_sigmas=np.array([cfg.prior_sigma_m, cfg.prior_sigma_m,
                                                       np.radians(cfg.prior_sigma_deg)]))
         self.odometry_noise = pose_covariance(motion.odometry_sigma_m, motion.odometry_sigma_deg)
+        self.jump = pose_covariance(motion.relocalized_sigma_m, motion.relocalized_sigma_deg)
+        self.step_factor: dict[int, int] = {}  # the front-end between factor into each pose
         self.estimates: dict[int, np.ndarray] = {}  # the latest solution, every pose so far
         self.chain: dict[int, np.ndarray] = {}  # the front end's steps composed: no loops, no optimization
         self.step_covariance: dict[int, np.ndarray] = {}  # each step's covariance in its previous pose's frame
@@ -47,7 +49,7 @@ class BackEnd:
         else:
             relative = between(previous, step.pose)
             self.step_covariance[k] = local_covariance(step.covariance, previous[2])
-            self.graph.add_odometry(k - 1, k, relative, self.step_covariance[k])
+            self.step_factor[k] = self.graph.add_odometry(k - 1, k, relative, self.step_covariance[k])
             if odometry_step is not None:
                 self.graph.add_odometry(k - 1, k, odometry_step, self.odometry_noise)
             self.chain[k] = compose(self.chain[k - 1], relative)
@@ -61,9 +63,16 @@ class BackEnd:
         if loops:
             self.estimates.update(self.graph.optimize(self.cfg.gnc))
 
+    def cut(self, k: int) -> None:
+        """The front end's step into pose k was a jump it did not see (a kidnapped terminal): it
+        keeps next to no information."""
+        if k in self.step_factor:
+            self.step_covariance[k] = self.jump
+            self.graph.loosen(self.step_factor[k], self.jump)
+
     def relocalized_pose(self, loop: LoopClosure) -> np.ndarray:
         """The world pose a relocalization places its scan at."""
-        return compose(self.estimates[loop.anchor], loop.relative)
+        return LoopCloser.placed_pose(loop, self.estimates)
 
     def drift(self, anchor: int, key: int, distance: float) -> np.ndarray:
         """First-order drift between two poses: the step covariances summed, the heading's variance

@@ -146,6 +146,15 @@ class LoopClosureConfig(_Section):
     # relocalized where it scores relocalize_gain better than its local match
     contradicted_fraction: float = Field(0.15, gt=0, le=1)
     relocalize_gain: float = Field(0.25, ge=0)
+    # a matched scan scoring below suspect_drop times the median of the latest suspect_window opens a
+    # trial (:mod:`radioslam.slam.lost_found`): searched for in the whole map, then followed; once
+    # confirm_scans in a row are each explained relocalize_gain better there, they are relocalized
+    suspect_drop: float = Field(0.7, gt=0, le=1)
+    suspect_window: int = Field(10, ge=2)
+    confirm_scans: int = Field(3, ge=1)
+    # unless the map near the front end's pose, carried to the place found, scores this fraction of
+    # its own score in place: the room looks the same from both places (a symmetric room)
+    self_similar: float = Field(0.2, ge=0, le=1)
 
 
 class PoseGraphConfig(_Section):

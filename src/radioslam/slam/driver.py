@@ -21,6 +21,7 @@ from radioslam.slam.config import SlamConfig
 from radioslam.slam.errors import SlamError
 from radioslam.slam.front_end import FrontEnd, Step
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
+from radioslam.slam.lost_found import LostAndFound
 from radioslam.slam.scan_points import prepare_points
 from radioslam.slam.status import ScanStatus
 
@@ -89,6 +90,7 @@ class RadioSlam:
             raise SlamError(f"{len(odometry)} odometry poses for {len(scans)} scans", field="(odometry)")
         front_end, loop_closer, back_end = FrontEnd.from_config(cfg, odometry), LoopCloser.from_config(cfg), \
             BackEnd.from_config(cfg)
+        lost_and_found = LostAndFound(cfg.loop_closure)
         steps: list[Step] = []
         seconds, lost = [], 0  # lost: consecutive scans nothing matched
         contradiction = Contradiction(cfg.loop_closure.contradicted_fraction, cfg.loop_closure.relocalize_gain)
@@ -105,17 +107,28 @@ class RadioSlam:
             found = loop_closer.relocalize(k, points, back_end.estimates, k - lost) if suspect else None
             if found is not None and (step.status is ScanStatus.PREDICTED or contradiction.better(found.score, step)):
                 step = front_end.relocalized(back_end.relocalized_pose(found), found.score)
-            # 4. the pose and the factors tying it to the previous one into the pose graph
+            relocalizations = [] if found is None else [found]
+            # 4. a score drop opens a trial elsewhere in the map; once confirmed by the scans after it, the
+            #    terminal was carried there (kidnapped): every scan of the trial is relocalized
+            confirmed = lost_and_found.observe(k, step.status, step.pose, step.score, points, back_end.estimates,
+                                               loop_closer)
+            if confirmed:
+                back_end.cut(confirmed[0].key)
+                for loop in confirmed[:-1]:
+                    steps[loop.key] = front_end.relocalized(back_end.relocalized_pose(loop), loop.score, confirmed)
+                step = front_end.relocalized(back_end.relocalized_pose(confirmed[-1]), confirmed[-1].score, confirmed)
+                relocalizations = confirmed
+            # 5. the pose and the factors tying it to the previous one into the pose graph
             back_end.add(k, step, front_end.motion.odometry_step(k))
-            # 5. the scan joins the local map and the current submap; the motion model learns the step
+            # 6. the scan joins the local map and the current submap; the motion model learns the step
             front_end.update(k, step, points, back_end.estimates.get(k - 1))
             if step.status is not ScanStatus.SKIPPED:
                 loop_closer.add(k, points)
-            # 6. loop closures against older submaps near the pose (or the relocalization), then optimize
+            # 7. loop closures against older submaps near the pose (or the relocalizations), then optimize
             loops = [] if step.status in (ScanStatus.SKIPPED, ScanStatus.DEGENERATE, ScanStatus.PREDICTED) else \
                 [self.loop_hook(lc) for lc in loop_closer.close(k, back_end.estimates, back_end.version,
                                                                  back_end.drift)]
-            back_end.add_loops(loops + ([found] if found is not None else []))
+            back_end.add_loops(loops + relocalizations)
             steps.append(step)
             seconds.append(time.perf_counter() - tick)
         back_end.finish()

@@ -207,8 +207,12 @@ class FrontEnd:
         self.motion.update(None if jumped else between(previous, step.pose),
                            observed=step.status is ScanStatus.MATCHED)
 
-    def relocalized(self, pose: np.ndarray, score: float) -> Step:
-        """The step of a lost scan that the loop closer found again at ``pose``."""
+    def relocalized(self, pose: np.ndarray, score: float, trial: list | None = None) -> Step:
+        """The step of a lost scan that the loop closer found again at ``pose``; ``trial``: the
+        relocalizations of a confirmed trial it belongs to (:mod:`radioslam.slam.lost_found`)."""
         m = self.motion_cfg  # next to no information about the jump itself: the relocalization fixes the pose
         jump = pose_covariance(m.relocalized_sigma_m, m.relocalized_sigma_deg)
-        return Step(pose, jump, ScanStatus.RELOCALIZED, score, note="lost, relocalized against the whole map")
+        note = "lost, relocalized against the whole map" if not trial else \
+            (f"taken elsewhere: scans {trial[0].key}–{trial[-1].key} match another place of the map far better "
+             "than the local map, relocalized there")
+        return Step(pose, jump, ScanStatus.RELOCALIZED, score, note=note)

@@ -40,7 +40,7 @@ from radioslam.slam.pose_graph import local_covariance
 from radioslam.slam.refine import fit_score, refine_pose
 from radioslam.slam.rotation_search import HeadingSearch
 from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points
-from radioslam.slam.se2 import between, pose_covariance, wrap_angle
+from radioslam.slam.se2 import between, compose, pose_covariance, wrap_angle
 from radioslam.slam.submap import Submap
 
 
@@ -152,21 +152,40 @@ class LoopCloser:
                                   step)
         return local, refine_pose(grid, points.xy, points.normals, local.pose, grid.resolution, step)
 
-    def relocalize(self, k: int, points: ScanPoints, estimates: dict[int, np.ndarray],
-                   before: int | None = None) -> LoopClosure | None:
-        """Scan k placed where it matches best in the whole map (every scan before ``before``, at the
-        latest poses, with the free space they saw), over the map's extent and every heading the
-        normals suggest; None when no place holds it unambiguously (a rival place within the
-        ambiguity margin: a symmetric room), or the match is weak or degenerate. The constraint ties
-        it to the map scan nearest the place found."""
-        c, f, g = self.cfg, self.front_cfg, self.grid_cfg
-        keys = [m for m in self.points if m != k and (before is None or m < before)]
-        if not keys:
-            return None
+    def whole_map(self, keys: list[int], estimates: dict[int, np.ndarray]) -> tuple[LikelihoodGrid, np.ndarray]:
+        """The likelihood field of the scans ``keys`` at their latest poses with the free space they
+        saw (one grid: small submaps, each seen from a few poses, let a wrong place outscore the right
+        one), and the map points' world normals."""
+        g = self.grid_cfg
         xy, normals = fused_points(keys, estimates, self.points, np.zeros(3))
-        grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, c.relocalize_margin_m, normals,
+        grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, self.cfg.relocalize_margin_m, normals,
                                           np.radians(g.normal_sigma_deg), g.plane_reach_m,
                                           fused_free(keys, estimates, self.points), g.free_penalty)
+        return grid, normals
+
+    def map_keys(self, k: int, before: int | None = None) -> list[int]:
+        """Every scan of the map other than k (and before ``before``)."""
+        return [m for m in self.points if m != k and (before is None or m < before)]
+
+    def follow(self, grid: LikelihoodGrid, points: ScanPoints,
+               guess: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+        """The scan refined against ``grid`` near ``guess``: its pose, score and covariance there."""
+        local, pose = self._local_fit(grid, points, guess)
+        return pose, fit_score(grid, points.xy, points.normals, pose), local.covariance
+
+    def relocalize(self, k: int, points: ScanPoints, estimates: dict[int, np.ndarray],
+                   before: int | None = None,
+                   whole: tuple[LikelihoodGrid, np.ndarray] | None = None) -> LoopClosure | None:
+        """Scan k placed where it matches best in the whole map (every scan before ``before``, at the
+        latest poses, with the free space they saw; or the ``whole`` map given), over the map's extent
+        and every heading the normals suggest; None when no place holds it unambiguously (a rival place
+        within the ambiguity margin: a symmetric room), or the match is weak or degenerate. The
+        constraint ties it to the map scan nearest the place found."""
+        c, f = self.cfg, self.front_cfg
+        keys = self.map_keys(k, before)
+        if not keys:
+            return None
+        grid, normals = whole or self.whole_map(keys, estimates)
         lo, hi = grid.origin, grid.origin + np.array(grid.values.shape) * grid.resolution
         headings = HeadingSearch.from_config(f).headings(points.normals, normals)
         found = BranchAndBound(grid, c.relocalize_levels).search(
@@ -185,6 +204,17 @@ class LoopCloser:
             return None
         if self.degeneracy.matched_weak(grid, pose, points.xy, points.normals, local.covariance) is not None:
             return None
+        return self.placed(k, pose, score, local.covariance, keys, estimates)
+
+    @staticmethod
+    def placed_pose(loop: LoopClosure, estimates: dict[int, np.ndarray]) -> np.ndarray:
+        """The world pose a relocalization places its scan at (latest estimates)."""
+        return compose(estimates[loop.anchor], loop.relative)
+
+    @staticmethod
+    def placed(k: int, pose: np.ndarray, score: float, covariance: np.ndarray, keys: list[int],
+               estimates: dict[int, np.ndarray]) -> LoopClosure:
+        """The relocalization of scan k at world ``pose``: tied to the map scan nearest it."""
         anchor = keys[int(np.argmin([np.linalg.norm(estimates[m][:2] - pose[:2]) for m in keys]))]
-        return LoopClosure(anchor, k, between(estimates[anchor], pose), local_covariance(local.covariance,
+        return LoopClosure(anchor, k, between(estimates[anchor], pose), local_covariance(covariance,
                            estimates[anchor][2]), score, 1.0, relocalization=True)

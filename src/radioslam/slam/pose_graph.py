@@ -47,9 +47,18 @@ class PoseGraph:
         noise = gtsam.noiseModel.Gaussian.Covariance(np.asarray(covariance, dtype=np.float64))
         self.graph.add(gtsam.BetweenFactorPose2(i, j, _pose2(relative), noise))
 
-    def add_odometry(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray) -> None:
+    def add_odometry(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray) -> int:
+        """A between factor GNC must keep; its index."""
         self.inliers.append(self.graph.size())
         self._between(i, j, relative, covariance)
+        return self.graph.size() - 1
+
+    def loosen(self, index: int, covariance: np.ndarray) -> None:
+        """The between factor at ``index`` keeps its measurement with a new covariance."""
+        factor = self.graph.at(index)
+        noise = gtsam.noiseModel.Gaussian.Covariance(np.asarray(covariance, dtype=np.float64))
+        self.graph.replace(index, gtsam.BetweenFactorPose2(factor.keys()[0], factor.keys()[1], factor.measured(),
+                                                           noise))
 
     def add_loop(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray,
                  known_inlier: bool = False) -> None:
