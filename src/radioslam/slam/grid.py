@@ -132,10 +132,10 @@ class LikelihoodGrid:
         branch and bound)."""
         fields = self.fields if fields is None else fields
         nx, ny = fields.shape[1:]
-        x, y = np.clip(x, 0, nx - 1), np.clip(y, 0, ny - 1)
-        like = fields[np.asarray(on_plane, dtype=np.int32), x, y]
+        cell = np.clip(x, 0, nx - 1) * ny + np.clip(y, 0, ny - 1)  # flat indices: one gather, not three
+        like = np.take(fields, np.asarray(on_plane, dtype=np.intp) * (nx * ny) + cell)
         if point_phasor is not None:  # free space (negative) contradicts whatever the normal
-            agree = phasor_agreement(self.normal_phasors[x, y], point_phasor, self.normal_sigma)
+            agree = phasor_agreement(np.take(self.normal_phasors, cell), point_phasor, self.normal_sigma)
             like = np.where(like > 0, like * agree, like)
         return like
 
@@ -154,10 +154,11 @@ class LikelihoodGrid:
         x0, y0 = np.clip(i0[:, 0], 0, hi[0]), np.clip(i0[:, 1], 0, hi[1])
         x1, y1 = np.clip(i0[:, 0] + 1, 0, hi[0]), np.clip(i0[:, 1] + 1, 0, hi[1])
 
-        field = np.asarray(on_plane, dtype=np.int64)
+        plane = np.asarray(on_plane, dtype=np.intp) * self.values.size
+        flat, ny = self.fields.ravel(), self.values.shape[1]
 
-        def corner(x, y):
-            return self.fields[field, x, y]
+        def corner(x, y):  # flat indices: one gather, not three
+            return np.take(flat, plane + x * ny + y)
 
         v00, v10, v01, v11 = corner(x0, y0), corner(x1, y0), corner(x0, y1), corner(x1, y1)
         fx, fy = f[:, 0], f[:, 1]
