@@ -222,3 +222,20 @@ def test_strict_turns_a_lost_stretch_into_exit_3(demo_run, tmp_path):
     assert "tracking lost: scans 20–22" in done.stderr
     assert json.loads((run / "slam.json").read_text())["tracking_lost"] is True
     assert _cli("slam", str(run)).returncode == 0  # without --strict: a warning, not a failure
+
+
+@pytest.mark.parametrize("statuses, lost", [
+    ("m" + "d" * 9 + "m", []),  # nine steps along an unfixed direction: the pace carries them
+    ("m" + "d" * 10 + "m", list(range(1, 11))),  # ten: dead reckoning, tracking lost
+    ("m" + "dpd" * 4 + "m", list(range(1, 13))),  # predicted scans among them count too
+    ("mpmpm", []),  # single predicted scans are new views
+    ("mppm", [1, 2]),
+])
+def test_lost_stretches_are_predicted_runs_or_long_unfixed_runs(statuses, lost):
+    from radioslam.slam.driver import SlamResult
+
+    codes = {"m": ScanStatus.MATCHED, "d": ScanStatus.DEGENERATE, "p": ScanStatus.PREDICTED}
+    n = len(statuses)
+    result = SlamResult(np.zeros((n, 3)), np.zeros((n, 3)), [codes[c] for c in statuses], np.zeros(n))
+    assert result.lost_scans == lost
+    assert result.tracking_lost == bool(lost)

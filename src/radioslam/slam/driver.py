@@ -36,6 +36,7 @@ class SlamResult:
     warnings: list[str] = field(default_factory=list)
     seconds_per_scan: np.ndarray = field(default_factory=lambda: np.zeros(0))
     lost_after: int = 2  # this many consecutive predicted scans are a lost stretch
+    dead_reckoned_after: int = 10  # and this many consecutive predicted or degenerate ones
 
     def scans_with(self, status: ScanStatus) -> list[int]:
         return [k for k, s in enumerate(self.status) if s is status]
@@ -47,10 +48,13 @@ class SlamResult:
     @property
     def lost_scans(self) -> list[int]:
         """Scans of the stretches of at least ``lost_after`` consecutive scans whose poses rest on
-        the motion model alone (one predicted scan between matched ones is a new view, not lost)."""
-        lost = np.array([0] + [int(s.lost) for s in self.status] + [0])
-        runs = np.flatnonzero(np.diff(lost)).reshape(-1, 2)  # (start, end) of each stretch: 0 on both sides
-        return [k for a, b in runs if b - a >= self.lost_after for k in range(a, b)]
+        the motion model alone (one predicted scan between matched ones is a new view, not lost),
+        and of at least ``dead_reckoned_after`` consecutive scans of which none fixed every
+        direction (predicted or degenerate: along a hall whose ends it never sees, the position
+        along it is the motion model's for that many steps)."""
+        lost = stretches([s.lost for s in self.status], self.lost_after)
+        unfixed = stretches([s.lost or s is ScanStatus.DEGENERATE for s in self.status], self.dead_reckoned_after)
+        return sorted(set(lost) | set(unfixed))
 
     @property
     def tracking_lost(self) -> bool:
@@ -63,8 +67,9 @@ class SlamResult:
         lines = [f"{len(keys)} scan(s) {status.value}: {scan_ranges(keys)}" for status in ScanStatus
                  if status is not ScanStatus.MATCHED and (keys := self.scans_with(status))]
         if self.tracking_lost:
-            lines.append(f"tracking lost: scans {scan_ranges(self.lost_scans)} matched nothing and were not "
-                         "relocalized; their poses are the motion model's")
+            lines.append(f"tracking lost: scans {scan_ranges(self.lost_scans)} matched nothing, or nothing fixed "
+                         "their position along one direction, and were not relocalized; their poses are the "
+                         "motion model's")
         return lines
 
     @property
@@ -132,15 +137,17 @@ class RadioSlam:
             steps.append(step)
             seconds.append(time.perf_counter() - tick)
         back_end.finish()
-        return self._result(steps, back_end, seconds, cfg.loop_closure.relocalize_after)
+        return self._result(steps, back_end, seconds, cfg.loop_closure.relocalize_after, cfg.motion.dead_reckoned_scans)
 
     @staticmethod
-    def _result(steps: list[Step], back_end: BackEnd, seconds: list[float], lost_after: int) -> SlamResult:
+    def _result(steps: list[Step], back_end: BackEnd, seconds: list[float], lost_after: int,
+                dead_reckoned_after: int) -> SlamResult:
         n = len(steps)
         result = SlamResult(poses=np.array([back_end.estimates[k] for k in range(n)]),
                             odometry=np.array([back_end.chain[k] for k in range(n)]),
                             status=[s.status for s in steps], match_score=np.array([s.score for s in steps]),
-                            loops=back_end.loops, seconds_per_scan=np.array(seconds), lost_after=lost_after)
+                            loops=back_end.loops, seconds_per_scan=np.array(seconds), lost_after=lost_after,
+                            dead_reckoned_after=dead_reckoned_after)
         result.warnings = [f"scan {k}: {s.note}" for k, s in enumerate(steps) if s.note] + result.summary_lines()
         return result
 
@@ -160,6 +167,13 @@ class Contradiction:
 
     def better(self, score: float, step: Step) -> bool:
         return self.suspicious(step) and score >= (1.0 + self.gain) * step.score
+
+
+def stretches(flags: list[bool], at_least: int) -> list[int]:
+    """The indices of the runs of at least ``at_least`` consecutive True flags."""
+    padded = np.array([0] + [int(f) for f in flags] + [0])
+    runs = np.flatnonzero(np.diff(padded)).reshape(-1, 2)  # (start, end) of each run: 0 on both sides
+    return [k for a, b in runs if b - a >= at_least for k in range(a, b)]
 
 
 def scan_ranges(keys: list[int]) -> str:
