@@ -46,6 +46,11 @@ def evaluate(case: Kidnap, poses: np.ndarray) -> dict:
             "kidnapped_error_m": kidnapped_error}
 
 
+def letters(statuses) -> str:
+    """'mmra…': each status's first letter."""
+    return "".join(s.value[0] for s in statuses)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seed", type=int, default=1)
@@ -62,7 +67,6 @@ def main() -> None:
         row = evaluate(case, result.poses)
         taken = slice(case.start, case.start + case.length)
         nxt = slice(case.start + case.length, case.start + 2 * case.length)
-        letters = lambda statuses: "".join(s.value[0] for s in statuses)  # noqa: E731
         passed += row["ate_after_m"] <= TARGET_M
         print(f"{case.scene.name:34} {case.start:5d} {letters(result.status[taken]):28} "
               f"{np.median(row['kidnapped_error_m']):14.2f} {letters(result.status[nxt]):28} "

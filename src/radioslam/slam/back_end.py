@@ -24,7 +24,6 @@ class BackEnd:
         self.graph = PoseGraph(prior_sigmas=np.array([cfg.prior_sigma_m, cfg.prior_sigma_m,
                                                       np.radians(cfg.prior_sigma_deg)]))
         self.odometry_noise = pose_covariance(motion.odometry_sigma_m, motion.odometry_sigma_deg)
-        self.jump = pose_covariance(motion.relocalized_sigma_m, motion.relocalized_sigma_deg)
         self.step_factor: dict[int, int] = {}  # the front-end between factor into each pose
         self.estimates: dict[int, np.ndarray] = {}  # the latest solution, every pose so far
         self.chain: dict[int, np.ndarray] = {}  # the front end's steps composed: no loops, no optimization
@@ -63,12 +62,12 @@ class BackEnd:
         if loops:
             self.estimates.update(self.graph.optimize(self.cfg.gnc))
 
-    def cut(self, k: int) -> None:
+    def cut(self, k: int, jump: np.ndarray) -> None:
         """The front end's step into pose k was a jump it did not see (a kidnapped terminal): it
-        keeps next to no information."""
+        keeps only the ``jump`` covariance (isotropic in position, so the same in every frame)."""
         if k in self.step_factor:
-            self.step_covariance[k] = self.jump
-            self.graph.loosen(self.step_factor[k], self.jump)
+            self.step_covariance[k] = jump
+            self.graph.loosen(self.step_factor[k], jump)
 
     def relocalized_pose(self, loop: LoopClosure) -> np.ndarray:
         """The world pose a relocalization places its scan at."""

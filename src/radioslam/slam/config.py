@@ -96,8 +96,6 @@ class FrontEndConfig(_Section):
     # (sd 1.5–2.3 cm and 0.3° per scan, seeds 1–5)
     floor_sigma_m: float = Field(0.02, ge=0)
     floor_sigma_deg: float = Field(0.3, ge=0)
-    # a scan is lost when its best score is below this after the search: the loop closer relocalizes it
-    lost_score: float = Field(0.20, ge=0, le=1)
 
 
 class MotionConfig(_Section):

@@ -118,7 +118,7 @@ class RadioSlam:
             confirmed = lost_and_found.observe(k, step.status, step.pose, step.score, points, back_end.estimates,
                                                loop_closer)
             if confirmed:
-                back_end.cut(confirmed[0].key)
+                back_end.cut(confirmed[0].key, front_end.jump)
                 for loop in confirmed[:-1]:
                     steps[loop.key] = front_end.relocalized(back_end.relocalized_pose(loop), loop.score, confirmed)
                 step = front_end.relocalized(back_end.relocalized_pose(confirmed[-1]), confirmed[-1].score, confirmed)

@@ -72,6 +72,8 @@ class FrontEnd:
         self.heading_search = HeadingSearch.from_config(cfg)
         self.floor = pose_covariance(cfg.floor_sigma_m, cfg.floor_sigma_deg)
         self.predicted = pose_covariance(motion_cfg.predicted_sigma_m, motion_cfg.predicted_sigma_deg)
+        # a relocalized scan's jump from the pose before it: next to no information (the relocalization fixes it)
+        self.jump = pose_covariance(motion_cfg.relocalized_sigma_m, motion_cfg.relocalized_sigma_deg)
         self.keys: list[int] = []  # scans of the local map, oldest first
         self.points: dict[int, ScanPoints] = {}
 
@@ -210,9 +212,7 @@ class FrontEnd:
     def relocalized(self, pose: np.ndarray, score: float, trial: list | None = None) -> Step:
         """The step of a lost scan that the loop closer found again at ``pose``; ``trial``: the
         relocalizations of a confirmed trial it belongs to (:mod:`radioslam.slam.lost_found`)."""
-        m = self.motion_cfg  # next to no information about the jump itself: the relocalization fixes the pose
-        jump = pose_covariance(m.relocalized_sigma_m, m.relocalized_sigma_deg)
         note = "lost, relocalized against the whole map" if not trial else \
             (f"taken elsewhere: scans {trial[0].key}–{trial[-1].key} match another place of the map far better "
              "than the local map, relocalized there")
-        return Step(pose, jump, ScanStatus.RELOCALIZED, score, note=note)
+        return Step(pose, self.jump, ScanStatus.RELOCALIZED, score, note=note)

@@ -58,7 +58,8 @@ class LostAndFound:
         self.trial: Trial | None = None
 
     def suspect(self, score: float) -> bool:
-        """A score below ``suspect_drop`` times the median of the latest ``suspect_window`` scores."""
+        """A score below ``suspect_drop`` times the median of the latest ``suspect_window`` scores
+        (once at least half that many are known)."""
         recent = self.scores[-self.cfg.suspect_window:]
         return len(recent) >= self.cfg.suspect_window // 2 and score < self.cfg.suspect_drop * float(np.median(recent))
 

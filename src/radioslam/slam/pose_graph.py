@@ -19,6 +19,10 @@ def _pose2(p: np.ndarray) -> gtsam.Pose2:
     return gtsam.Pose2(float(p[0]), float(p[1]), float(p[2]))
 
 
+def _noise(covariance: np.ndarray) -> gtsam.noiseModel.Gaussian:
+    return gtsam.noiseModel.Gaussian.Covariance(np.asarray(covariance, dtype=np.float64))
+
+
 def local_covariance(world_covariance: np.ndarray, theta: float) -> np.ndarray:
     """A covariance of (x, y, θ) in the world frame, expressed in the frame of a pose at θ."""
     rot = np.eye(3)
@@ -44,8 +48,7 @@ class PoseGraph:
             self.graph.add(gtsam.PriorFactorPose2(key, _pose2(pose), prior))
 
     def _between(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray) -> None:
-        noise = gtsam.noiseModel.Gaussian.Covariance(np.asarray(covariance, dtype=np.float64))
-        self.graph.add(gtsam.BetweenFactorPose2(i, j, _pose2(relative), noise))
+        self.graph.add(gtsam.BetweenFactorPose2(i, j, _pose2(relative), _noise(covariance)))
 
     def add_odometry(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray) -> int:
         """A between factor GNC must keep; its index."""
@@ -56,9 +59,8 @@ class PoseGraph:
     def loosen(self, index: int, covariance: np.ndarray) -> None:
         """The between factor at ``index`` keeps its measurement with a new covariance."""
         factor = self.graph.at(index)
-        noise = gtsam.noiseModel.Gaussian.Covariance(np.asarray(covariance, dtype=np.float64))
         self.graph.replace(index, gtsam.BetweenFactorPose2(factor.keys()[0], factor.keys()[1], factor.measured(),
-                                                           noise))
+                                                           _noise(covariance)))
 
     def add_loop(self, i: int, j: int, relative: np.ndarray, covariance: np.ndarray,
                  known_inlier: bool = False) -> None:
