@@ -15,7 +15,7 @@ from radioslam.slam.config import MotionConfig, PoseGraphConfig
 from radioslam.slam.front_end import Step
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
 from radioslam.slam.pose_graph import PoseGraph, local_covariance
-from radioslam.slam.se2 import between, compose, pose_covariance
+from radioslam.slam.se2 import between, compose, inverse, pose_covariance
 
 
 class BackEnd:
@@ -24,6 +24,8 @@ class BackEnd:
         self.graph = PoseGraph(prior_sigmas=np.array([cfg.prior_sigma_m, cfg.prior_sigma_m,
                                                       np.radians(cfg.prior_sigma_deg)]))
         self.odometry_noise = pose_covariance(motion.odometry_sigma_m, motion.odometry_sigma_deg)
+        # a step the front end did not see (a kidnap, a branch left): next to no information
+        self.jump_covariance = pose_covariance(motion.relocalized_sigma_m, motion.relocalized_sigma_deg)
         self.step_factor: dict[int, int] = {}  # the front-end between factor into each pose
         self.estimates: dict[int, np.ndarray] = {}  # the latest solution, every pose so far
         self.chain: dict[int, np.ndarray] = {}  # the front end's steps composed: no loops, no optimization
@@ -62,12 +64,31 @@ class BackEnd:
         if loops:
             self.estimates.update(self.graph.optimize(self.cfg.gnc))
 
-    def cut(self, k: int, jump: np.ndarray) -> None:
+    def cut(self, k: int) -> None:
         """The front end's step into pose k was a jump it did not see (a kidnapped terminal): it
-        keeps only the ``jump`` covariance (isotropic in position, so the same in every frame)."""
+        keeps only the relocalized-jump covariance (isotropic in position, so the same in every frame)."""
         if k in self.step_factor:
-            self.step_covariance[k] = jump
-            self.graph.loosen(self.step_factor[k], jump)
+            self.step_covariance[k] = self.jump_covariance
+            self.graph.loosen(self.step_factor[k], self.jump_covariance)
+
+    def switch(self, k: int, jump: np.ndarray) -> None:
+        """The front end's step into pose k was a rival's (:mod:`radioslam.slam.forks`): pose k and
+        every later one are carried by the world transform ``jump``, the step into k measures the
+        rival's, the loops tying those poses to older ones (made in the branch left) lose their
+        weight, and the graph is solved again."""
+        moved = {m: compose(jump, pose) for m, pose in self.estimates.items() if m >= k}
+        self.graph.move(moved)
+        self.estimates.update(moved)
+        if k in self.step_factor:
+            self.graph.remeasure(self.step_factor[k], between(self.estimates[k - 1], self.estimates[k]))
+            carried = compose(self.chain[k - 1], between(self.estimates[k - 1], self.estimates[k]))
+            correction = compose(carried, inverse(self.chain[k]))
+            self.chain.update({m: compose(correction, pose) for m, pose in self.chain.items() if m >= k})
+        left = [index for anchor, key, index in self.graph.loops if anchor < k <= key]
+        for index in left:
+            self.graph.loosen(index, self.jump_covariance)
+        self.loops = [loop for loop in self.loops if not loop.anchor < k <= loop.key]
+        self.estimates.update(self.graph.optimize(self.cfg.gnc))
 
     def relocalized_pose(self, loop: LoopClosure) -> np.ndarray:
         """The world pose a relocalization places its scan at."""

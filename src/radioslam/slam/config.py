@@ -155,7 +155,15 @@ class LoopClosureConfig(_Section):
     confirm_scans: int = Field(3, ge=1)
     # unless the map near the front end's pose, carried to the place found, scores this fraction of
     # its own score in place: the room looks the same from both places (a symmetric room)
-    self_similar: float = Field(0.2, ge=0, le=1)
+    self_similar: float = Field(0.1, ge=0, le=1)
+    # an ambiguous scan with rivals turned from the choice is a fork (:mod:`radioslam.slam.forks`; the
+    # latest fork_limit, each for fork_memory scans): a later scan carried to a rival's branch that closes a
+    # loop of weight ≥ fork_weight with the submaps from before the fork, scoring fork_gain better than any
+    # the chosen branch closed with them, takes the rival
+    fork_memory: int = Field(15, ge=1)
+    fork_limit: int = Field(3, ge=0)
+    fork_weight: float = Field(0.5, gt=0, le=1)
+    fork_gain: float = Field(0.25, ge=0)
 
 
 class PoseGraphConfig(_Section):

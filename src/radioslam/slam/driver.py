@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -19,6 +19,7 @@ from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.back_end import BackEnd
 from radioslam.slam.config import SlamConfig
 from radioslam.slam.errors import SlamError
+from radioslam.slam.forks import Forks
 from radioslam.slam.front_end import FrontEnd, Step
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
 from radioslam.slam.lost_found import LostAndFound
@@ -95,7 +96,7 @@ class RadioSlam:
             raise SlamError(f"{len(odometry)} odometry poses for {len(scans)} scans", field="(odometry)")
         front_end, loop_closer, back_end = FrontEnd.from_config(cfg, odometry), LoopCloser.from_config(cfg), \
             BackEnd.from_config(cfg)
-        lost_and_found = LostAndFound(cfg.loop_closure)
+        lost_and_found, forks = LostAndFound(cfg.loop_closure), Forks.from_config(cfg)
         steps: list[Step] = []
         seconds, lost = [], 0  # lost: consecutive scans nothing matched
         contradiction = Contradiction(cfg.loop_closure.contradicted_fraction, cfg.loop_closure.relocalize_gain)
@@ -118,13 +119,14 @@ class RadioSlam:
             confirmed = lost_and_found.observe(k, step.status, step.pose, step.score, points, back_end.estimates,
                                                loop_closer)
             if confirmed:
-                back_end.cut(confirmed[0].key, front_end.jump)
+                back_end.cut(confirmed[0].key)
                 for loop in confirmed[:-1]:
                     steps[loop.key] = front_end.relocalized(back_end.relocalized_pose(loop), loop.score, confirmed)
                 step = front_end.relocalized(back_end.relocalized_pose(confirmed[-1]), confirmed[-1].score, confirmed)
                 relocalizations = confirmed
             # 5. the pose and the factors tying it to the previous one into the pose graph
             back_end.add(k, step, front_end.motion.odometry_step(k))
+            forks.remember(k, step, back_end.estimates)  # an ambiguous scan's turned rivals, for step 8
             # 6. the scan joins the local map and the current submap; the motion model learns the step
             front_end.update(k, step, points, back_end.estimates.get(k - 1))
             if step.status is not ScanStatus.SKIPPED:
@@ -133,6 +135,16 @@ class RadioSlam:
             loops = [] if step.status in (ScanStatus.SKIPPED, ScanStatus.DEGENERATE, ScanStatus.PREDICTED) else \
                 [self.loop_hook(lc) for lc in loop_closer.close(k, back_end.estimates, back_end.version,
                                                                  back_end.drift)]
+            # 8. an ambiguous scan's rival branch that closes a loop with the map from before it, where the
+            #    chosen branch closes none as good, is taken: every pose since carried by its jump
+            decided = forks.observe(k, step.status, loops, back_end.estimates, loop_closer, back_end.version,
+                                    back_end.drift)
+            if decided is not None:
+                back_end.switch(decided.fork, decided.jump)
+                loops = [lc for lc in loops if lc.anchor >= decided.fork] + [decided.loop]
+                lost_and_found.forget()
+                steps[decided.fork] = replace(steps[decided.fork], note=f"{steps[decided.fork].note}; its rival "
+                                              f"taken at scan {k}: it closes a loop with the map from before")
             back_end.add_loops(loops + relocalizations)
             steps.append(step)
             seconds.append(time.perf_counter() - tick)

@@ -107,13 +107,17 @@ class LoopCloser:
         return self.matchers[submap.anchor][1]
 
     def close(self, k: int, estimates: dict[int, np.ndarray], version: int,
-              drift: Callable[[int, int, float], np.ndarray]) -> list[LoopClosure]:
-        """Verified loop closures of scan k against older submaps near its pose; ``drift(anchor, k,
-        distance)`` is the covariance the odometry accumulated between the two poses."""
-        current = estimates[k]
+              drift: Callable[[int, int, float], np.ndarray], pose: np.ndarray | None = None,
+              before: int | None = None) -> list[LoopClosure]:
+        """Verified loop closures of scan k against older submaps near its pose (or near ``pose``
+        instead, and only submaps of scans before ``before``); ``drift(anchor, k, distance)`` is the
+        covariance the odometry accumulated between the two poses."""
+        current = estimates[k] if pose is None else pose
         margin = max(2 * self.front_cfg.window_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
         found = []
         for s in self.submaps[:max(0, len(self.submaps) - 1 - self.cfg.skip_submaps)]:
+            if before is not None and s.keys[-1] >= before:
+                continue
             members = np.array([estimates[m][:2] for m in s.keys])
             if np.min(np.linalg.norm(members - current[:2], axis=1)) > self.cfg.radius_m:
                 continue
@@ -166,6 +170,20 @@ class LoopCloser:
     def map_keys(self, k: int, before: int | None = None) -> list[int]:
         """Every scan of the map other than k (and before ``before``)."""
         return [m for m in self.points if m != k and (before is None or m < before)]
+
+    def looks_alike(self, jump: np.ndarray, pose: np.ndarray, keys: list[int], grid: LikelihoodGrid,
+                    estimates: dict[int, np.ndarray]) -> bool:
+        """Whether the map ``grid`` of the scans ``keys`` looks the same after the world transform
+        ``jump``: its scans within ``radius_m`` of ``pose``, carried by the jump, land on its walls again
+        (score at least ``self_similar`` of their score in place). Then the room looks the same from
+        both places (a symmetric room, a row of aisles) and no scan can tell them apart; carried
+        anywhere else the points fall on free space or nothing."""
+        near = [m for m in keys if np.linalg.norm(estimates[m][:2] - pose[:2]) <= self.cfg.radius_m]
+        if not near:
+            return False
+        xy, normals = fused_points(near, estimates, self.points, np.zeros(3))
+        in_place = fit_score(grid, xy, normals, np.zeros(3))
+        return fit_score(grid, xy, normals, jump) >= self.cfg.self_similar * in_place
 
     def follow(self, grid: LikelihoodGrid, points: ScanPoints,
                guess: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:

@@ -27,8 +27,7 @@ import numpy as np
 from radioslam.slam.config import LoopClosureConfig
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
-from radioslam.slam.refine import fit_score
-from radioslam.slam.scan_points import ScanPoints, fused_points
+from radioslam.slam.scan_points import ScanPoints
 from radioslam.slam.se2 import between, compose, inverse
 from radioslam.slam.status import ScanStatus
 
@@ -56,6 +55,10 @@ class LostAndFound:
         self.cfg = cfg
         self.scores: list[float] = []  # the front end's scores of tracked scans
         self.trial: Trial | None = None
+
+    def forget(self) -> None:
+        """Drop the open trial (the poses it was followed from have moved)."""
+        self.trial = None
 
     def suspect(self, score: float) -> bool:
         """A score below ``suspect_drop`` times the median of the latest ``suspect_window`` scores
@@ -89,21 +92,9 @@ class LostAndFound:
         if found is None or found.score < (1.0 + self.cfg.relocalize_gain) * score:
             return
         jump = compose(loop_closer.placed_pose(found, estimates), inverse(pose))  # carries F onto the place found
-        if self._self_similar(jump, pose, keys, grid, estimates, loop_closer):
+        if loop_closer.looks_alike(jump, pose, keys, grid, estimates):
             return
         self.trial = Trial(grid, keys, pose, [found])
-
-    def _self_similar(self, jump, pose, keys, grid, estimates, loop_closer: LoopCloser) -> bool:
-        """Whether the map around the front end's pose, carried by ``jump``, lands on the map's walls
-        again (scores at least ``self_similar`` of its score in place): then the room looks the same
-        from both places (a symmetric room, a row of aisles) and the scan cannot tell them apart.
-        Carried anywhere else its points fall on free space or nothing."""
-        near = [m for m in keys if np.linalg.norm(estimates[m][:2] - pose[:2]) <= self.cfg.radius_m]
-        if not near:
-            return False
-        xy, normals = fused_points(near, estimates, loop_closer.points, np.zeros(3))
-        in_place = fit_score(grid, xy, normals, np.zeros(3))
-        return fit_score(grid, xy, normals, jump) >= self.cfg.self_similar * in_place
 
     def _follow(self, k, pose, score, points, estimates, loop_closer: LoopCloser) -> None:
         trial = self.trial

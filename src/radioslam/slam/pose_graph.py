@@ -35,7 +35,7 @@ class PoseGraph:
     graph: gtsam.NonlinearFactorGraph = field(default_factory=gtsam.NonlinearFactorGraph)
     initial: gtsam.Values = field(default_factory=gtsam.Values)
     inliers: list[int] = field(default_factory=list)  # factor indices GNC must keep
-    loops: list[tuple[int, int]] = field(default_factory=list)
+    loops: list[tuple[int, int, int]] = field(default_factory=list)  # (i, j, factor index) of each loop
     version: int = 0  # counts the solutions: estimates derived from an older one are stale
     prior_sigmas: np.ndarray = field(default_factory=lambda: np.array([1e-4, 1e-4, 1e-5]))  # the first pose
 
@@ -68,8 +68,19 @@ class PoseGraph:
         of a lost pose to the map)."""
         if known_inlier:
             self.inliers.append(self.graph.size())
-        self.loops.append((i, j))
+        self.loops.append((i, j, self.graph.size()))
         self._between(i, j, relative, covariance)
+
+    def remeasure(self, index: int, relative: np.ndarray) -> None:
+        """The between factor at ``index`` keeps its covariance with a new measurement."""
+        factor = self.graph.at(index)
+        self.graph.replace(index, gtsam.BetweenFactorPose2(factor.keys()[0], factor.keys()[1], _pose2(relative),
+                                                           factor.noiseModel()))
+
+    def move(self, poses: dict[int, np.ndarray]) -> None:
+        """New initial values of the poses given (a branch carried elsewhere before optimizing)."""
+        for key, pose in poses.items():
+            self.initial.update(key, _pose2(pose))
 
     def optimize(self, robust: bool = True) -> dict[int, np.ndarray]:
         """Optimized poses by key; loop factors robust (GNC, truncated least squares) when asked."""

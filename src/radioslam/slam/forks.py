@@ -1,0 +1,126 @@
+"""Ambiguous scans decided by the loops the scans after them close (issue #12, point 2).
+
+In a room of right angles a scan turned by 90° or 180° still matches its local map, and in a
+long hall a U-turn looks like walking on: the front end then finds rival poses, turned from
+its choice, that score within the ambiguity margin (:mod:`radioslam.slam.front_end`), and
+takes the one the motion prefers. When that choice is wrong every later scan agrees with the
+wrong map, because the local map follows the chosen branch; the loops the walk would close
+with the map from before the turn are then rejected by the loop closer's χ² gate, as
+inconsistent with the trajectory. So an ambiguous scan is remembered as a *fork* for
+``fork_memory`` scans, in the spirit of max-mixture factors (Olson & Agarwal, "Inference on
+networks of mixtures for robust robot mapping", IJRR 2013: keep the alternatives, let the
+data pick one):
+
+1. each rival is the chosen branch carried by a rigid ``jump`` (recomputed from the latest
+   estimates at every scan: the step into the fork scan replaced by the rival's);
+2. at each later scan, the loop closer searches the submaps from before the fork for the
+   scan carried by each jump, with its full acceptance tests (score, χ² against the rival
+   branch, degeneracy): a *rival loop*;
+3. a rival loop that scores ``fork_gain`` better than every loop the chosen branch closed
+   with those submaps at that scan (none: 0) decides the fork: the step into the fork scan
+   is replaced by the rival's, which carries every later pose by the jump
+   (:meth:`radioslam.slam.back_end.BackEnd.switch`), and the rival loop joins the graph.
+
+Both branches are judged by the map from before the fork, never by their own scans: a wrong
+branch builds a local map that agrees with itself. In a room that looks the same under the
+jump both branches close loops alike and the motion's choice stands.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from radioslam.slam.config import LoopClosureConfig
+from radioslam.slam.front_end import Step
+from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.loop_closer import LoopCloser, LoopClosure
+from radioslam.slam.se2 import between, compose, inverse, wrap_angle
+from radioslam.slam.status import ScanStatus
+
+
+@dataclass(frozen=True)
+class Fork:
+    """An ambiguous scan and its turned rivals, each as its step from the pose before it."""
+
+    key: int
+    rivals: np.ndarray  # (R, 3) each rival's pose in the frame of pose key − 1
+
+    def jumps(self, estimates: dict[int, np.ndarray]) -> np.ndarray:
+        """(R, 3) world transforms carrying the chosen branch (latest estimates) onto each rival's."""
+        return np.array([compose(compose(estimates[self.key - 1], rival), inverse(estimates[self.key]))
+                         for rival in self.rivals])
+
+
+@dataclass(frozen=True)
+class Decision:
+    fork: int  # the ambiguous scan whose rival is taken
+    jump: np.ndarray  # carries the chosen branch onto the rival's
+    loop: LoopClosure  # the rival loop that decided it (relative to the rival branch)
+
+
+class Forks:
+    """Remembers forks and tests their rivals; ``observe`` once per scan, after its loops."""
+
+    def __init__(self, cfg: LoopClosureConfig, turn_rad: float):
+        self.cfg, self.turn_rad = cfg, turn_rad  # rivals turned at least this much from the choice fork
+        self.open: list[Fork] = []
+        self.maps: dict[int, tuple[int, list[int], LikelihoodGrid]] = {}  # fork → (solution, keys, map before it)
+
+    @classmethod
+    def from_config(cls, cfg) -> "Forks":
+        return cls(cfg.loop_closure, np.radians(cfg.front_end.distinct_deg))
+
+    def _map_before(self, fork: int, k: int, estimates: dict[int, np.ndarray], loop_closer: LoopCloser,
+                    version: int) -> tuple[list[int], LikelihoodGrid]:
+        """The scans before the fork and their map at the latest solution (built once per solution)."""
+        if self.maps.get(fork, (None,))[0] != version:
+            keys = loop_closer.map_keys(k, before=fork)
+            self.maps[fork] = (version, keys, loop_closer.whole_map(keys, estimates)[0])
+        return self.maps[fork][1:]
+
+    def remember(self, k: int, step: Step, estimates: dict[int, np.ndarray]) -> None:
+        """Scan k's turned rivals, if any (once pose k − 1 and k are in ``estimates``)."""
+        self.open = [f for f in self.open if k - f.key <= self.cfg.fork_memory]
+        self.maps = {key: m for key, m in self.maps.items() if key in {f.key for f in self.open}}
+        if k - 1 not in estimates or not len(step.rivals):
+            return
+        turned = step.rivals[np.abs(wrap_angle(step.rivals[:, 2] - step.pose[2])) >= self.turn_rad]
+        if len(turned) and self.cfg.fork_limit:
+            self.open = self.open[len(self.open) + 1 - self.cfg.fork_limit:]  # the latest fork_limit − 1
+            self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned])))
+
+    def _revisits(self, k: int, fork: int, estimates: dict[int, np.ndarray]) -> bool:
+        """Whether the chosen branch puts scan k within ``radius_m`` of a pose from before the fork:
+        where the loop closer looked for its loops with the map from before."""
+        before = np.array([estimates[m][:2] for m in range(fork) if m in estimates])
+        return bool(len(before)) and float(np.min(np.linalg.norm(before - estimates[k][:2], axis=1))) <= \
+            self.cfg.radius_m
+
+    def observe(self, k: int, status: ScanStatus, loops: list[LoopClosure], estimates: dict[int, np.ndarray],
+                loop_closer: LoopCloser, version: int,
+                drift: Callable[[int, int, float], np.ndarray]) -> Decision | None:
+        """Scan k, its own loops ``loops``; the decision of a fork for a rival, else None."""
+        if status not in (ScanStatus.MATCHED, ScanStatus.AMBIGUOUS):
+            return None
+        for fork in self.open:
+            if fork.key >= k:
+                continue
+            chosen = max((lc.score for lc in loops if lc.anchor < fork.key), default=0.0)
+            for jump in fork.jumps(estimates):
+                rival = compose(jump, estimates[k])
+                found = loop_closer.close(k, estimates, version, drift, pose=rival, before=fork.key)
+                best = max(found, key=lambda lc: lc.score * lc.weight, default=None)
+                if best is None or best.weight < self.cfg.fork_weight or \
+                        best.score <= (1.0 + self.cfg.fork_gain) * chosen:
+                    continue
+                # the map around the rival's place, carried back to the chosen one, must not land on walls
+                # again: else the room looks the same from both (a rectangle turned by 180°)
+                keys, grid = self._map_before(fork.key, k, estimates, loop_closer, version)
+                if loop_closer.looks_alike(inverse(jump), rival, keys, grid, estimates):
+                    continue
+                self.open = [f for f in self.open if f.key < fork.key]
+                return Decision(fork.key, jump, best)
+        return None

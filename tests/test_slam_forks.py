@@ -1,0 +1,124 @@
+"""Ambiguous scans decided by the loops the scans after them close (issue #12, point 2):
+the fork's decision rule, the back end's switch to a rival branch, and a hall U-turn."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from radioslam.slam import RadioSlam, ScanStatus, SlamConfig
+from radioslam.slam.back_end import BackEnd
+from radioslam.slam.forks import Forks
+from radioslam.slam.front_end import Step
+from radioslam.slam.loop_closer import LoopClosure
+from radioslam.slam.se2 import between, compose, inverse, pose_covariance
+
+COV = pose_covariance(0.02, 0.3)
+
+
+def walk(n: int, turn_at: int | None = None) -> np.ndarray:
+    """Poses 1 m apart along x, turned by 180° on the spot at ``turn_at`` and walked back."""
+    poses, pose = [], np.zeros(3)
+    for k in range(n):
+        if k:
+            pose = compose(pose, [0.0, 0.0, np.pi] if k == turn_at else [1.0, 0.0, 0.0])
+        poses.append(pose)
+    return np.array(poses)
+
+
+class StubCloser:
+    """The loop closer's side of a fork: a rival loop near ``place`` (to submap 0) of ``score``."""
+
+    def __init__(self, place: np.ndarray, score: float, alike: bool = False):
+        self.place, self.score, self.alike, self.asked = place, score, alike, []
+
+    def close(self, k, estimates, version, drift, pose=None, before=None):
+        self.asked.append((k, pose, before))
+        if pose is None or np.linalg.norm(pose[:2] - self.place[:2]) > 0.5:
+            return []
+        return [LoopClosure(0, k, between(estimates[0], pose), COV, self.score, 1.0)]
+
+    def map_keys(self, k, before=None):
+        return list(range(before))
+
+    def whole_map(self, keys, estimates):
+        return None, None
+
+    def looks_alike(self, jump, pose, keys, grid, estimates):
+        return self.alike
+
+
+def fork_at_scan_3(closer: StubCloser, chosen_loops: list[LoopClosure] | None = None):
+    """Scan 3 is ambiguous (the chosen pose walked on, the rival turned by 180°); scan 5 is then
+    observed with ``chosen_loops`` as its own loops. Returns the decision and the estimates."""
+    forks = Forks.from_config(SlamConfig())
+    estimates = {k: p for k, p in enumerate(walk(6))}  # the chosen branch: straight on
+    rival = compose(estimates[2], [0.0, 0.0, np.pi])
+    for k in range(6):
+        rivals = rival[None] if k == 3 else np.zeros((0, 3))
+        forks.remember(k, Step(estimates[k], COV, ScanStatus.AMBIGUOUS if k == 3 else ScanStatus.MATCHED,
+                               0.6, rivals), {m: estimates[m] for m in range(k + 1)})
+    decided = forks.observe(5, ScanStatus.MATCHED, chosen_loops or [], estimates, closer, 0,
+                            lambda a, b, d: COV)
+    return decided, estimates
+
+
+def test_a_rival_branch_that_closes_a_loop_the_chosen_one_does_not_is_taken():
+    """The rival branch (turned back at scan 3) puts scan 5 at x = 0, next to the walk's start: a
+    loop there decides the fork, with the jump that carries the chosen branch onto the rival's."""
+    truth_5 = compose(compose(walk(3)[2], [0.0, 0.0, np.pi]), [2.0, 0.0, 0.0])  # back at x = 0
+    closer = StubCloser(truth_5, 0.6)
+    decided, estimates = fork_at_scan_3(closer)
+    assert decided is not None and decided.fork == 3
+    np.testing.assert_allclose(compose(decided.jump, estimates[5]), truth_5, atol=1e-9)
+    assert all(before == 3 for _, pose, before in closer.asked if pose is not None)  # only the map before it
+
+
+def test_the_choice_stands_when_the_chosen_branch_closes_as_good_a_loop_or_the_room_looks_alike():
+    truth_5 = compose(compose(walk(3)[2], [0.0, 0.0, np.pi]), [2.0, 0.0, 0.0])
+    as_good = [LoopClosure(0, 5, np.zeros(3), COV, 0.55, 1.0)]  # within fork_gain of the rival's 0.6
+    assert fork_at_scan_3(StubCloser(truth_5, 0.6), as_good)[0] is None
+    assert fork_at_scan_3(StubCloser(truth_5, 0.6, alike=True))[0] is None
+    assert fork_at_scan_3(StubCloser(truth_5, 0.2))[0] is not None  # weight 1: score alone does not gate
+    newer = [LoopClosure(3, 5, np.zeros(3), COV, 0.9, 1.0)]  # a loop within the chosen branch says nothing
+    assert fork_at_scan_3(StubCloser(truth_5, 0.6), newer)[0] is not None
+
+
+def test_switching_carries_every_pose_since_the_fork_and_the_graph_keeps_the_rivals_step():
+    """Poses before the fork stay, the fork and every later pose are carried by the jump, the
+    graph's step into the fork measures the rival's (a turn on the spot), and the front-end chain
+    follows it."""
+    cfg = SlamConfig()
+    back_end = BackEnd.from_config(cfg)
+    poses = walk(6)
+    for k, pose in enumerate(poses):
+        back_end.add(k, Step(pose, COV, ScanStatus.MATCHED, 0.6))
+    jump = compose(compose(poses[2], [0.0, 0.0, np.pi]), inverse(poses[3]))  # carries pose 3 onto the rival
+    before = {k: p.copy() for k, p in back_end.estimates.items()}
+    back_end.switch(3, jump)
+    for k in range(3):
+        np.testing.assert_allclose(back_end.estimates[k], before[k], atol=1e-6)
+    for k in range(3, 6):
+        np.testing.assert_allclose(back_end.estimates[k], compose(jump, before[k]), atol=1e-6)
+    # the step into the fork is now the rival's turn on the spot; the chain (front end only) follows
+    np.testing.assert_allclose(between(back_end.estimates[2], back_end.estimates[3]), [0, 0, np.pi], atol=1e-6)
+    np.testing.assert_allclose(back_end.chain[5], back_end.estimates[5], atol=1e-6)
+
+
+def test_a_u_turn_in_a_hall_taken_for_walking_on_is_found_by_the_loop_it_closes():
+    """A 28 m hall walked at a slant, a U-turn between two scans near its centre line: the front end
+    takes it for walking on (the rival turned by 180° scores within the margin), and the walk
+    back over the mapped hall then runs 3.3 m off. The rival's branch closes a loop with the map
+    from before the turn: taken, the walk is at its true place."""
+    from test_slam_motion import sensed
+
+    from radioslam.eval.trajectory_metrics import ate_rmse
+    from radioslam.scene.procedural import MotionKind, RoomKind, generate_case
+
+    case = generate_case(RoomKind.HALL, MotionKind.RANDOM, 13, max_poses=24)
+    scans = sensed(case.scene, case.seed)
+    without = RadioSlam(SlamConfig.model_validate({"loop_closure": {"fork_limit": 0}})).run(scans)
+    result = RadioSlam().run(scans)
+    assert ate_rmse(without.poses, case.scene.poses) > 1.0
+    assert ate_rmse(result.poses, case.scene.poses) <= 0.2
+    assert result.status[11] is ScanStatus.AMBIGUOUS
+    assert any(w.startswith("scan 11:") and "rival taken" in w for w in result.warnings)
