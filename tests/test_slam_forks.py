@@ -31,7 +31,7 @@ class StubCloser:
     def __init__(self, place: np.ndarray, score: float, alike: bool = False):
         self.place, self.score, self.alike, self.asked = place, score, alike, []
 
-    def close(self, k, estimates, version, drift, pose=None, before=None):
+    def close(self, k, estimates, version, drift, pose=None, before=None, window=None):
         self.asked.append((k, pose, before))
         if pose is None or np.linalg.norm(pose[:2] - self.place[:2]) > 0.5:
             return []
@@ -56,7 +56,7 @@ def fork_at_scan_3(closer: StubCloser, chosen_loops: list[LoopClosure] | None = 
     for k in range(6):
         rivals = rival[None] if k == 3 else np.zeros((0, 3))
         forks.remember(k, Step(estimates[k], COV, ScanStatus.AMBIGUOUS if k == 3 else ScanStatus.MATCHED,
-                               0.6, rivals), {m: estimates[m] for m in range(k + 1)})
+                               0.6, rivals), {m: estimates[m] for m in range(k + 1)}, closer)
     decided = forks.observe(5, ScanStatus.MATCHED, chosen_loops or [], estimates, closer, 0,
                             lambda a, b, d: COV)
     return decided, estimates

@@ -164,6 +164,10 @@ class LoopClosureConfig(_Section):
     fork_limit: int = Field(3, ge=0)
     fork_weight: float = Field(0.5, gt=0, le=1)
     fork_gain: float = Field(0.25, ge=0)
+    # a rival's branch is a precise hypothesis (the chosen branch carried by one jump): its loops are
+    # searched this far around it, not over the loop window
+    fork_window_m: float = Field(0.5, gt=0)
+    fork_window_deg: float = Field(6.0, gt=0)
 
 
 class PoseGraphConfig(_Section):

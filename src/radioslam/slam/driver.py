@@ -126,7 +126,7 @@ class RadioSlam:
                 relocalizations = confirmed
             # 5. the pose and the factors tying it to the previous one into the pose graph
             back_end.add(k, step, front_end.motion.odometry_step(k))
-            forks.remember(k, step, back_end.estimates)  # an ambiguous scan's turned rivals, for step 8
+            forks.remember(k, step, back_end.estimates, loop_closer)  # an ambiguous scan's turned rivals
             # 6. the scan joins the local map and the current submap; the motion model learns the step
             front_end.update(k, step, points, back_end.estimates.get(k - 1))
             if step.status is not ScanStatus.SKIPPED:

@@ -43,10 +43,14 @@ from radioslam.slam.status import ScanStatus
 
 @dataclass(frozen=True)
 class Fork:
-    """An ambiguous scan and its turned rivals, each as its step from the pose before it."""
+    """An ambiguous scan and its turned rivals, each as its step from the pose before it, with the
+    map from before it (as it stood then: what the similarity test reads)."""
 
     key: int
     rivals: np.ndarray  # (R, 3) each rival's pose in the frame of pose key − 1
+    keys: list[int]  # the scans before it
+    grid: LikelihoodGrid  # their map
+    poses: dict[int, np.ndarray]  # their poses then
 
     def jumps(self, estimates: dict[int, np.ndarray]) -> np.ndarray:
         """(R, 3) world transforms carrying the chosen branch (latest estimates) onto each rival's."""
@@ -66,38 +70,30 @@ class Forks:
 
     def __init__(self, cfg: LoopClosureConfig, turn_rad: float):
         self.cfg, self.turn_rad = cfg, turn_rad  # rivals turned at least this much from the choice fork
+        self.window = (cfg.fork_window_m, np.radians(cfg.fork_window_deg))
         self.open: list[Fork] = []
-        self.maps: dict[int, tuple[int, list[int], LikelihoodGrid]] = {}  # fork → (solution, keys, map before it)
 
     @classmethod
     def from_config(cls, cfg) -> "Forks":
         return cls(cfg.loop_closure, np.radians(cfg.front_end.distinct_deg))
 
-    def _map_before(self, fork: int, k: int, estimates: dict[int, np.ndarray], loop_closer: LoopCloser,
-                    version: int) -> tuple[list[int], LikelihoodGrid]:
-        """The scans before the fork and their map at the latest solution (built once per solution)."""
-        if self.maps.get(fork, (None,))[0] != version:
-            keys = loop_closer.map_keys(k, before=fork)
-            self.maps[fork] = (version, keys, loop_closer.whole_map(keys, estimates)[0])
-        return self.maps[fork][1:]
-
-    def remember(self, k: int, step: Step, estimates: dict[int, np.ndarray]) -> None:
-        """Scan k's turned rivals, if any (once pose k − 1 and k are in ``estimates``)."""
+    def remember(self, k: int, step: Step, estimates: dict[int, np.ndarray], loop_closer: LoopCloser) -> None:
+        """Scan k's turned rivals, if any (once pose k − 1 and k are in ``estimates``), those under whose
+        jump the map before scan k looks alike left out: no later scan can tell them from the choice."""
         self.open = [f for f in self.open if k - f.key <= self.cfg.fork_memory]
-        self.maps = {key: m for key, m in self.maps.items() if key in {f.key for f in self.open}}
-        if k - 1 not in estimates or not len(step.rivals):
+        if k - 1 not in estimates or not len(step.rivals) or not self.cfg.fork_limit:
             return
         turned = step.rivals[np.abs(wrap_angle(step.rivals[:, 2] - step.pose[2])) >= self.turn_rad]
-        if len(turned) and self.cfg.fork_limit:
+        keys = loop_closer.map_keys(k, before=k)
+        if not len(turned) or not keys:
+            return
+        grid = loop_closer.whole_map(keys, estimates)[0]
+        turned = np.array([r for r in turned if not loop_closer.looks_alike(
+            compose(step.pose, inverse(r)), r, keys, grid, estimates)]).reshape(-1, 3)
+        if len(turned):
             self.open = self.open[len(self.open) + 1 - self.cfg.fork_limit:]  # the latest fork_limit − 1
-            self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned])))
-
-    def _revisits(self, k: int, fork: int, estimates: dict[int, np.ndarray]) -> bool:
-        """Whether the chosen branch puts scan k within ``radius_m`` of a pose from before the fork:
-        where the loop closer looked for its loops with the map from before."""
-        before = np.array([estimates[m][:2] for m in range(fork) if m in estimates])
-        return bool(len(before)) and float(np.min(np.linalg.norm(before - estimates[k][:2], axis=1))) <= \
-            self.cfg.radius_m
+            self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned]), keys, grid,
+                                  {m: estimates[m] for m in keys}))
 
     def observe(self, k: int, status: ScanStatus, loops: list[LoopClosure], estimates: dict[int, np.ndarray],
                 loop_closer: LoopCloser, version: int,
@@ -111,15 +107,15 @@ class Forks:
             chosen = max((lc.score for lc in loops if lc.anchor < fork.key), default=0.0)
             for jump in fork.jumps(estimates):
                 rival = compose(jump, estimates[k])
-                found = loop_closer.close(k, estimates, version, drift, pose=rival, before=fork.key)
+                # the map around the rival's place, carried back to the chosen one, must not land on walls
+                # again: else the room looks the same from both (a rectangle turned by 180°)
+                if loop_closer.looks_alike(inverse(jump), rival, fork.keys, fork.grid, fork.poses):
+                    continue
+                found = loop_closer.close(k, estimates, version, drift, pose=rival, before=fork.key,
+                                          window=self.window)
                 best = max(found, key=lambda lc: lc.score * lc.weight, default=None)
                 if best is None or best.weight < self.cfg.fork_weight or \
                         best.score <= (1.0 + self.cfg.fork_gain) * chosen:
-                    continue
-                # the map around the rival's place, carried back to the chosen one, must not land on walls
-                # again: else the room looks the same from both (a rectangle turned by 180°)
-                keys, grid = self._map_before(fork.key, k, estimates, loop_closer, version)
-                if loop_closer.looks_alike(inverse(jump), rival, keys, grid, estimates):
                     continue
                 self.open = [f for f in self.open if f.key < fork.key]
                 return Decision(fork.key, jump, best)
