@@ -78,8 +78,8 @@ class Forks:
         return cls(cfg.loop_closure, np.radians(cfg.front_end.distinct_deg))
 
     def remember(self, k: int, step: Step, estimates: dict[int, np.ndarray], loop_closer: LoopCloser) -> None:
-        """Scan k's turned rivals, if any (once pose k − 1 and k are in ``estimates``), those under whose
-        jump the map before scan k looks alike left out: no later scan can tell them from the choice."""
+        """Scan k's turned rivals, if any (once pose k − 1 and k are in ``estimates``), with the map before
+        scan k."""
         self.open = [f for f in self.open if k - f.key <= self.cfg.fork_memory]
         if k - 1 not in estimates or not len(step.rivals) or not self.cfg.fork_limit:
             return
@@ -87,13 +87,9 @@ class Forks:
         keys = loop_closer.map_keys(k, before=k)
         if not len(turned) or not keys:
             return
-        grid = loop_closer.whole_map(keys, estimates)[0]
-        turned = np.array([r for r in turned if not loop_closer.looks_alike(
-            compose(step.pose, inverse(r)), r, keys, grid, estimates)]).reshape(-1, 3)
-        if len(turned):
-            self.open = self.open[len(self.open) + 1 - self.cfg.fork_limit:]  # the latest fork_limit − 1
-            self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned]), keys, grid,
-                                  {m: estimates[m] for m in keys}))
+        self.open = self.open[len(self.open) + 1 - self.cfg.fork_limit:]  # the latest fork_limit − 1
+        self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned]), keys,
+                              loop_closer.whole_map(keys, estimates)[0], {m: estimates[m] for m in keys}))
 
     def observe(self, k: int, status: ScanStatus, loops: list[LoopClosure], estimates: dict[int, np.ndarray],
                 loop_closer: LoopCloser, version: int,
