@@ -47,10 +47,12 @@ class StubCloser:
         return self.alike
 
 
-def fork_at_scan_3(closer: StubCloser, chosen_loops: list[LoopClosure] | None = None):
+def fork_at_scan_3(closer: StubCloser, chosen_loops: list[LoopClosure] | None = None, contradicted: bool = True):
     """Scan 3 is ambiguous (the chosen pose walked on, the rival turned by 180°); scan 5 is then
-    observed with ``chosen_loops`` as its own loops. Returns the decision and the estimates."""
+    observed with ``chosen_loops`` as its own loops, the chosen branch ``contradicted`` by the map
+    before the fork or not. Returns the decision and the estimates."""
     forks = Forks.from_config(SlamConfig())
+    forks._contradicted = lambda fork, k, estimates, loop_closer: contradicted
     estimates = {k: p for k, p in enumerate(walk(6))}  # the chosen branch: straight on
     rival = compose(estimates[2], [0.0, 0.0, np.pi])
     for k in range(6):
@@ -74,13 +76,36 @@ def test_a_rival_branch_that_closes_a_loop_the_chosen_one_does_not_is_taken():
 
 
 def test_the_choice_stands_when_the_chosen_branch_closes_as_good_a_loop_or_the_room_looks_alike():
+    """A rival loop alone is not enough: the chosen branch closing one as good (within fork_gain), a
+    room that looks alike under the jump, or a chosen branch nothing contradicts keep the choice."""
     truth_5 = compose(compose(walk(3)[2], [0.0, 0.0, np.pi]), [2.0, 0.0, 0.0])
     as_good = [LoopClosure(0, 5, np.zeros(3), COV, 0.55, 1.0)]  # within fork_gain of the rival's 0.6
     assert fork_at_scan_3(StubCloser(truth_5, 0.6), as_good)[0] is None
     assert fork_at_scan_3(StubCloser(truth_5, 0.6, alike=True))[0] is None
+    assert fork_at_scan_3(StubCloser(truth_5, 0.6), contradicted=False)[0] is None  # nothing against the choice
     assert fork_at_scan_3(StubCloser(truth_5, 0.2))[0] is not None  # weight 1: score alone does not gate
     newer = [LoopClosure(3, 5, np.zeros(3), COV, 0.9, 1.0)]  # a loop within the chosen branch says nothing
     assert fork_at_scan_3(StubCloser(truth_5, 0.6), newer)[0] is not None
+
+
+def test_a_branch_is_contradicted_by_walls_where_the_map_before_the_fork_saw_through():
+    """Points of the chosen branch on cells the map before the fork saw through (a specular line from
+    the terminal to a wall) count against it; the same points on the wall do not."""
+    from types import SimpleNamespace
+
+    from radioslam.slam.forks import Fork
+    from radioslam.slam.grid import LikelihoodGrid
+
+    wall = np.column_stack([np.full(41, 5.0), np.linspace(-2, 2, 41)])
+    seen_through = np.column_stack([np.linspace(0.0, 4.5, 91), np.zeros(91)])  # the line to the wall's foot
+    grid = LikelihoodGrid.from_points(wall, 0.05, 0.05, 5.5, np.full(41, np.pi), np.radians(1.0), 1.5,
+                                      seen_through, 1.0)
+    fork = Fork(1, np.zeros((1, 3)), [0], grid, {0: np.zeros(3)})
+    across = np.column_stack([np.full(20, 2.0), np.linspace(-0.5, 0.5, 20)])  # a wall across the line
+    forks = Forks.from_config(SlamConfig())
+    closer = SimpleNamespace(points={1: SimpleNamespace(xy=across, normals=np.full(20, np.nan))})
+    assert forks._contradicted(fork, 1, {1: np.zeros(3)}, closer)
+    assert not forks._contradicted(fork, 1, {1: np.array([3.0, 0.0, 0.0])}, closer)  # on the wall at x = 5
 
 
 def test_switching_carries_every_pose_since_the_fork_and_the_graph_keeps_the_rivals_step():

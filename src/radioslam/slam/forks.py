@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from radioslam.slam.config import LoopClosureConfig
+from radioslam.slam.correlative import candidate_likelihoods
 from radioslam.slam.front_end import Step
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
@@ -91,6 +92,17 @@ class Forks:
         self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned]), keys,
                               loop_closer.whole_map(keys, estimates)[0], {m: estimates[m] for m in keys}))
 
+    def _contradicted(self, fork: Fork, k: int, estimates: dict[int, np.ndarray], loop_closer: LoopCloser) -> bool:
+        """Whether the chosen branch put at least ``fork_contradicted`` of its points since the fork (scans
+        fork … k at their latest poses) on space the map from before the fork saw through: evidence
+        against the branch, not only for a rival. An exploring branch closes no loop with that map, and a
+        rival in the mapped part of a symmetric room does; only a wrong branch puts walls where the
+        terminal once walked or looked through. Counted over the whole stretch, not per scan."""
+        keys = [m for m in range(fork.key, k + 1) if m in loop_closer.points]
+        on_free = [candidate_likelihoods(fork.grid, loop_closer.points[m].xy, loop_closer.points[m].normals,
+                                         estimates[m], np.zeros(1), np.zeros(1, int)).ravel() < 0 for m in keys]
+        return bool(on_free) and float(np.mean(np.concatenate(on_free))) >= self.cfg.fork_contradicted
+
     def observe(self, k: int, status: ScanStatus, loops: list[LoopClosure], estimates: dict[int, np.ndarray],
                 loop_closer: LoopCloser, version: int,
                 drift: Callable[[int, int, float], np.ndarray]) -> Decision | None:
@@ -100,6 +112,8 @@ class Forks:
         for fork in self.open:
             if fork.key >= k:
                 continue
+            if not self._contradicted(fork, k, estimates, loop_closer):
+                continue  # nothing the chosen branch saw disagrees with the map from before the fork
             chosen = max((lc.score for lc in loops if lc.anchor < fork.key), default=0.0)
             for jump in fork.jumps(estimates):
                 rival = compose(jump, estimates[k])
