@@ -4,26 +4,32 @@ In a room of right angles a scan turned by 90° or 180° still matches its local
 long hall a U-turn looks like walking on: the front end then finds rival poses, turned from
 its choice, that score within the ambiguity margin (:mod:`radioslam.slam.front_end`), and
 takes the one the motion prefers. When that choice is wrong every later scan agrees with the
-wrong map, because the local map follows the chosen branch; the loops the walk would close
-with the map from before the turn are then rejected by the loop closer's χ² gate, as
-inconsistent with the trajectory. So an ambiguous scan is remembered as a *fork* for
-``fork_memory`` scans, in the spirit of max-mixture factors (Olson & Agarwal, "Inference on
-networks of mixtures for robust robot mapping", IJRR 2013: keep the alternatives, let the
-data pick one):
+wrong map, because the local map follows the chosen branch. So an ambiguous scan is
+remembered as a *fork* for ``fork_memory`` scans, with the map from before it frozen, in the
+spirit of max-mixture factors (Olson & Agarwal, "Inference on networks of mixtures for robust
+robot mapping", IJRR 2013: keep the alternatives, let the data pick one):
 
 1. each rival is the chosen branch carried by a rigid ``jump`` (recomputed from the latest
    estimates at every scan: the step into the fork scan replaced by the rival's);
-2. at each later scan, the loop closer searches the submaps from before the fork for the
-   scan carried by each jump, with its full acceptance tests (score, χ² against the rival
-   branch, degeneracy): a *rival loop*;
-3. a rival loop that scores ``fork_gain`` better than every loop the chosen branch closed
-   with those submaps at that scan (none: 0) decides the fork: the step into the fork scan
-   is replaced by the rival's, which carries every later pose by the jump
-   (:meth:`radioslam.slam.back_end.BackEnd.switch`), and the rival loop joins the graph.
+2. at each later scan, the loop closer searches the submaps wholly before the fork for the scan
+   carried by each jump, ±``fork_window`` (a jump is a precise hypothesis), with its full
+   acceptance tests (score, χ² against the rival branch, degeneracy): a *rival loop*;
+3. the fork is decided for the rival when all of these hold:
+   - the rival loop has weight ≥ ``fork_weight`` and scores ``fork_gain`` better than every
+     loop the chosen branch closed with those submaps at that scan (none: 0);
+   - the chosen branch is *contradicted*: ≥ ``fork_contradicted`` of its points since the fork
+     lie on space the frozen map saw through. An exploring branch closes no loop with the old
+     map while a rival in its mapped part may (a square room's 90° twin): a missing loop is
+     no evidence against the choice, a wall where the terminal once looked through is;
+   - the frozen map does not look alike under the jump
+     (:meth:`radioslam.slam.loop_closer.LoopCloser.looks_alike`: a rectangle turned by 180°).
+
+   Then the step into the fork scan is replaced by the rival's, which carries every later pose
+   by the jump (:meth:`radioslam.slam.back_end.BackEnd.switch`), and the rival loop joins the
+   graph.
 
 Both branches are judged by the map from before the fork, never by their own scans: a wrong
-branch builds a local map that agrees with itself. In a room that looks the same under the
-jump both branches close loops alike and the motion's choice stands.
+branch builds a local map that agrees with itself.
 """
 
 from __future__ import annotations
