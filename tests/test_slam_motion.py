@@ -230,11 +230,14 @@ def test_strict_turns_a_lost_stretch_into_exit_3(demo_run, tmp_path):
     ("m" + "dpd" * 4 + "m", list(range(1, 13))),  # predicted scans among them count too
     ("mpmpm", []),  # single predicted scans are new views
     ("mppm", [1, 2]),
+    ("m" + "dda" * 3 + "ds" + "m", list(range(1, 12))),  # ambiguous and skipped scans fix no one pose either
+    ("m" + "a" * 9 + "m", []),
 ])
 def test_lost_stretches_are_predicted_runs_or_long_unfixed_runs(statuses, lost):
     from radioslam.slam.driver import SlamResult
 
-    codes = {"m": ScanStatus.MATCHED, "d": ScanStatus.DEGENERATE, "p": ScanStatus.PREDICTED}
+    codes = {"m": ScanStatus.MATCHED, "d": ScanStatus.DEGENERATE, "p": ScanStatus.PREDICTED,
+             "a": ScanStatus.AMBIGUOUS, "s": ScanStatus.SKIPPED}
     n = len(statuses)
     result = SlamResult(np.zeros((n, 3)), np.zeros((n, 3)), [codes[c] for c in statuses], np.zeros(n))
     assert result.lost_scans == lost

@@ -211,7 +211,7 @@ def sense(
 CONFIG_HELP = "YAML config file; its slam: section sets the SLAM (see docs/architecture.md)"
 ODOMETRY_HELP = "relative motion from wheels or an IMU, one TUM pose per scan (its noise: slam.motion in --config)"
 STRICT_HELP = ("exit with status 3 when tracking was lost (a stretch of scans matched nothing, or a long "
-               "one in which nothing fixed every direction)")
+               "one in which none fixed one pose: a direction nothing fixes, rival poses alike)")
 TRACKING_LOST = 3  # exit status of --strict when tracking was lost
 
 

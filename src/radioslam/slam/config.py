@@ -110,8 +110,8 @@ class MotionConfig(_Section):
     # a pose the scans cannot fix (skipped, predicted) is tied to its neighbour this loosely
     predicted_sigma_m: float = Field(0.5, gt=0)
     predicted_sigma_deg: float = Field(10.0, gt=0)
-    # this many consecutive scans none of which fixed every direction (predicted or degenerate) are a
-    # lost stretch: the position along the weak direction has been dead reckoning for that many steps
+    # this many consecutive scans none of which fixed one pose (predicted, skipped, degenerate, ambiguous)
+    # are a lost stretch: the position along the weak direction has been dead reckoning for that many steps
     dead_reckoned_scans: int = Field(10, ge=1)
     # a relocalized scan's jump from the pose before it: next to no information
     relocalized_sigma_m: float = Field(100.0, gt=0)

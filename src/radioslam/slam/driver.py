@@ -37,7 +37,7 @@ class SlamResult:
     warnings: list[str] = field(default_factory=list)
     seconds_per_scan: np.ndarray = field(default_factory=lambda: np.zeros(0))
     lost_after: int = 2  # this many consecutive predicted scans are a lost stretch
-    dead_reckoned_after: int = 10  # and this many consecutive predicted or degenerate ones
+    dead_reckoned_after: int = 10  # and this many consecutive scans none of which fixed one pose
 
     def scans_with(self, status: ScanStatus) -> list[int]:
         return [k for k, s in enumerate(self.status) if s is status]
@@ -50,11 +50,11 @@ class SlamResult:
     def lost_scans(self) -> list[int]:
         """Scans of the stretches of at least ``lost_after`` consecutive scans whose poses rest on
         the motion model alone (one predicted scan between matched ones is a new view, not lost),
-        and of at least ``dead_reckoned_after`` consecutive scans of which none fixed every
-        direction (predicted or degenerate: along a hall whose ends it never sees, the position
-        along it is the motion model's for that many steps)."""
+        and of at least ``dead_reckoned_after`` consecutive scans of which none fixed one pose in
+        every direction (predicted, skipped, degenerate or ambiguous: along a hall whose ends it never
+        sees, the position along it is the motion model's for that many steps)."""
         lost = stretches([s.lost for s in self.status], self.lost_after)
-        unfixed = stretches([s.lost or s is ScanStatus.DEGENERATE for s in self.status], self.dead_reckoned_after)
+        unfixed = stretches([not s.fixes_pose for s in self.status], self.dead_reckoned_after)
         return sorted(set(lost) | set(unfixed))
 
     @property
@@ -68,9 +68,9 @@ class SlamResult:
         lines = [f"{len(keys)} scan(s) {status.value}: {scan_ranges(keys)}" for status in ScanStatus
                  if status is not ScanStatus.MATCHED and (keys := self.scans_with(status))]
         if self.tracking_lost:
-            lines.append(f"tracking lost: scans {scan_ranges(self.lost_scans)} matched nothing, or nothing fixed "
-                         "their position along one direction, and were not relocalized; their poses are the "
-                         "motion model's")
+            lines.append(f"tracking lost: scans {scan_ranges(self.lost_scans)} matched nothing, or for many scans "
+                         "in a row none fixed one pose (a direction nothing fixes, rival poses alike), and were "
+                         "not relocalized; their poses are the motion model's")
         return lines
 
     @property

@@ -20,3 +20,9 @@ class ScanStatus(str, Enum):
     def lost(self) -> bool:
         """The pose rests on the motion model alone, not on the scan."""
         return self is ScanStatus.PREDICTED
+
+    @property
+    def fixes_pose(self) -> bool:
+        """The scan fixed one pose in every direction: not predicted or skipped (the motion model's),
+        not degenerate (a direction nothing fixes) and not ambiguous (rival poses score alike)."""
+        return self in (ScanStatus.MATCHED, ScanStatus.RELOCALIZED)
