@@ -31,7 +31,7 @@ class StubCloser:
     def __init__(self, place: np.ndarray, score: float, alike: bool = False):
         self.place, self.score, self.alike, self.asked = place, score, alike, []
 
-    def close(self, k, estimates, version, drift, pose=None, before=None, window=None):
+    def close(self, k, estimates, version, drift, pose=None, before=None):
         self.asked.append((k, pose, before))
         if pose is None or np.linalg.norm(pose[:2] - self.place[:2]) > 0.5:
             return []
@@ -70,8 +70,8 @@ def test_a_rival_branch_that_closes_a_loop_the_chosen_one_does_not_is_taken():
     truth_5 = compose(compose(walk(3)[2], [0.0, 0.0, np.pi]), [2.0, 0.0, 0.0])  # back at x = 0
     closer = StubCloser(truth_5, 0.6)
     decided, estimates = fork_at_scan_3(closer)
-    assert decided is not None and decided.fork == 3
-    np.testing.assert_allclose(compose(decided.jump, estimates[5]), truth_5, atol=1e-9)
+    assert decided is not None and decided.fork == 3 and len(decided.switches) == 1
+    np.testing.assert_allclose(compose(decided.switches[0][1], estimates[5]), truth_5, atol=1e-9)
     assert all(before == 3 for _, pose, before in closer.asked if pose is not None)  # only the map before it
 
 
@@ -119,7 +119,7 @@ def test_switching_carries_every_pose_since_the_fork_and_the_graph_keeps_the_riv
         back_end.add(k, Step(pose, COV, ScanStatus.MATCHED, 0.6))
     jump = compose(compose(poses[2], [0.0, 0.0, np.pi]), inverse(poses[3]))  # carries pose 3 onto the rival
     before = {k: p.copy() for k, p in back_end.estimates.items()}
-    back_end.switch(3, jump)
+    back_end.switch([(3, jump)])
     for k in range(3):
         np.testing.assert_allclose(back_end.estimates[k], before[k], atol=1e-6)
     for k in range(3, 6):
@@ -147,3 +147,26 @@ def test_a_u_turn_in_a_hall_taken_for_walking_on_is_found_by_the_loop_it_closes(
     assert ate_rmse(result.poses, case.scene.poses) <= 0.2
     assert result.status[11] is ScanStatus.AMBIGUOUS
     assert any(w.startswith("scan 11:") and "rival taken" in w for w in result.warnings)
+
+
+def test_two_open_forks_are_also_tested_together_latest_switch_first():
+    """A second ambiguous turn inside the first's memory: the pair's branch carries scan k by both
+    jumps (the first's after the second's), and its switches come latest first, so that carrying
+    the later poses first leaves the earlier fork's jump valid."""
+    from radioslam.slam.forks import Fork
+
+    poses = walk(8)
+    estimates = {k: p for k, p in enumerate(poses)}
+    turn = np.array([[0.0, 0.0, np.pi]])  # each rival: turned on the spot instead of walking on
+    forks = Forks.from_config(SlamConfig())
+    forks.open = [Fork(2, turn, [0, 1], None, {}), Fork(5, turn, [0, 1, 2, 3, 4], None, {})]
+    found = list(forks.hypotheses(7, estimates))
+    assert [[key for key, _ in switches] for _, switches, _ in found] == [[2], [5], [5, 2]]
+    fork, switches, jump = found[2]
+    assert fork.key == 2
+    jump_2, jump_5 = forks.open[0].jumps(estimates)[0], forks.open[1].jumps(estimates)[0]
+    np.testing.assert_allclose(jump, compose(jump_2, jump_5), atol=1e-12)
+    # the pair's branch: back from pose 1 at scan 2, then walking on, turned back again at scan 5
+    both = compose(jump, estimates[7])
+    np.testing.assert_allclose(both, compose(compose(compose(poses[1], [0, 0, np.pi]), [2.0, 0, np.pi]), [2.0, 0, 0]),
+                               atol=1e-9)

@@ -71,11 +71,16 @@ class BackEnd:
             self.step_covariance[k] = self.jump_covariance
             self.graph.loosen(self.step_factor[k], self.jump_covariance)
 
-    def switch(self, k: int, jump: np.ndarray) -> None:
-        """The front end's step into pose k was a rival's (:mod:`radioslam.slam.forks`): pose k and
-        every later one are carried by the world transform ``jump``, the step into k measures the
-        rival's, the loops tying those poses to older ones (made in the branch left) lose their
-        weight, and the graph is solved again."""
+    def switch(self, switches: list[tuple[int, np.ndarray]]) -> None:
+        """The front end's steps into the poses k of ``switches`` (k, jump) were rivals'
+        (:mod:`radioslam.slam.forks`), latest first: pose k and every later one are carried by the
+        world transform ``jump``, the step into k measures the rival's, the loops tying those poses to
+        older ones (made in the branch left) lose their weight; then the graph is solved again."""
+        for k, jump in switches:
+            self._carry(k, jump)
+        self.estimates.update(self.graph.optimize(self.cfg.gnc))
+
+    def _carry(self, k: int, jump: np.ndarray) -> None:
         moved = {m: compose(jump, pose) for m, pose in self.estimates.items() if m >= k}
         self.graph.move(moved)
         self.estimates.update(moved)
@@ -84,11 +89,9 @@ class BackEnd:
             carried = compose(self.chain[k - 1], between(self.estimates[k - 1], self.estimates[k]))
             correction = compose(carried, inverse(self.chain[k]))
             self.chain.update({m: compose(correction, pose) for m, pose in self.chain.items() if m >= k})
-        left = [index for anchor, key, index in self.graph.loops if anchor < k <= key]
-        for index in left:
+        for index in [index for anchor, key, index in self.graph.loops if anchor < k <= key]:
             self.graph.loosen(index, self.jump_covariance)
         self.loops = [loop for loop in self.loops if not loop.anchor < k <= loop.key]
-        self.estimates.update(self.graph.optimize(self.cfg.gnc))
 
     def relocalized_pose(self, loop: LoopClosure) -> np.ndarray:
         """The world pose a relocalization places its scan at."""

@@ -167,10 +167,6 @@ class LoopClosureConfig(_Section):
     # and only once the chosen branch put this fraction of its points since the fork on space the map from
     # before it saw through (evidence against it: an exploring branch puts none there)
     fork_contradicted: float = Field(0.01, ge=0, le=1)
-    # a rival's branch is a precise hypothesis (the chosen branch carried by one jump): its loops are
-    # searched this far around it, not over the loop window
-    fork_window_m: float = Field(0.5, gt=0)
-    fork_window_deg: float = Field(6.0, gt=0)
 
 
 class PoseGraphConfig(_Section):

@@ -140,11 +140,12 @@ class RadioSlam:
             decided = forks.observe(k, step.status, loops, back_end.estimates, loop_closer, back_end.version,
                                     back_end.drift)
             if decided is not None:
-                back_end.switch(decided.fork, decided.jump)
+                back_end.switch(decided.switches)
                 loops = [lc for lc in loops if lc.anchor >= decided.fork] + [decided.loop]
                 lost_and_found.forget()
-                steps[decided.fork] = replace(steps[decided.fork], note=f"{steps[decided.fork].note}; its rival "
-                                              f"taken at scan {k}: it closes a loop with the map from before")
+                for key, _ in decided.switches:
+                    steps[key] = replace(steps[key], note=f"{steps[key].note}; its rival taken at scan {k}: it "
+                                         "closes a loop with the map from before")
             back_end.add_loops(loops + relocalizations)
             steps.append(step)
             seconds.append(time.perf_counter() - tick)

@@ -12,8 +12,9 @@ robot mapping", IJRR 2013: keep the alternatives, let the data pick one):
 1. each rival is the chosen branch carried by a rigid ``jump`` (recomputed from the latest
    estimates at every scan: the step into the fork scan replaced by the rival's);
 2. at each later scan, the loop closer searches the submaps wholly before the fork for the scan
-   carried by each jump, ±``fork_window`` (a jump is a precise hypothesis), with its full
-   acceptance tests (score, χ² against the rival branch, degeneracy): a *rival loop*;
+   carried by each jump (and by each pair of open forks' jumps together: a second ambiguous turn
+   inside the first's memory), with its full acceptance tests (window, score, χ² against the
+   rival branch, degeneracy): a *rival loop*;
 3. the fork is decided for the rival when all of these hold:
    - the rival loop has weight ≥ ``fork_weight`` and scores ``fork_gain`` better than every
      loop the chosen branch closed with those submaps at that scan (none: 0);
@@ -67,9 +68,13 @@ class Fork:
 
 @dataclass(frozen=True)
 class Decision:
-    fork: int  # the ambiguous scan whose rival is taken
-    jump: np.ndarray  # carries the chosen branch onto the rival's
+    switches: list[tuple[int, np.ndarray]]  # (ambiguous scan, jump onto its rival), latest first
     loop: LoopClosure  # the rival loop that decided it (relative to the rival branch)
+
+    @property
+    def fork(self) -> int:
+        """The earliest ambiguous scan whose rival is taken."""
+        return min(key for key, _ in self.switches)
 
 
 class Forks:
@@ -77,7 +82,6 @@ class Forks:
 
     def __init__(self, cfg: LoopClosureConfig, turn_rad: float):
         self.cfg, self.turn_rad = cfg, turn_rad  # rivals turned at least this much from the choice fork
-        self.window = (cfg.fork_window_m, np.radians(cfg.fork_window_deg))
         self.open: list[Fork] = []
 
     @classmethod
@@ -109,30 +113,44 @@ class Forks:
                                          estimates[m], np.zeros(1), np.zeros(1, int)).ravel() < 0 for m in keys]
         return bool(on_free) and float(np.mean(np.concatenate(on_free))) >= self.cfg.fork_contradicted
 
+    def hypotheses(self, k: int, estimates: dict[int, np.ndarray]):
+        """(fork, switches, jump) for every rival branch to test at scan k: each open fork's rivals, and
+        each pair of forks' rivals together (a second ambiguous turn inside the first's memory: in the
+        first's rival branch the second choice may be wrong too). ``jump`` carries scan k's pose; the
+        switches are latest first."""
+        forks = [f for f in self.open if f.key < k]
+        for fork in forks:
+            for jump in fork.jumps(estimates):
+                yield fork, [(fork.key, jump)], jump
+        for i, first in enumerate(forks):
+            for second in forks[i + 1:]:
+                for jump_a in first.jumps(estimates):
+                    for jump_b in second.jumps(estimates):
+                        yield first, [(second.key, jump_b), (first.key, jump_a)], compose(jump_a, jump_b)
+
     def observe(self, k: int, status: ScanStatus, loops: list[LoopClosure], estimates: dict[int, np.ndarray],
                 loop_closer: LoopCloser, version: int,
                 drift: Callable[[int, int, float], np.ndarray]) -> Decision | None:
-        """Scan k, its own loops ``loops``; the decision of a fork for a rival, else None."""
+        """Scan k, its own loops ``loops``; the decision of a fork (or two) for its rival, else None."""
         if status not in (ScanStatus.MATCHED, ScanStatus.AMBIGUOUS):
             return None
-        for fork in self.open:
-            if fork.key >= k:
-                continue
-            if not self._contradicted(fork, k, estimates, loop_closer):
+        contradicted: dict[int, bool] = {}
+        for fork, switches, jump in self.hypotheses(k, estimates):
+            if fork.key not in contradicted:
+                contradicted[fork.key] = self._contradicted(fork, k, estimates, loop_closer)
+            if not contradicted[fork.key]:
                 continue  # nothing the chosen branch saw disagrees with the map from before the fork
             chosen = max((lc.score for lc in loops if lc.anchor < fork.key), default=0.0)
-            for jump in fork.jumps(estimates):
-                rival = compose(jump, estimates[k])
-                # the map around the rival's place, carried back to the chosen one, must not land on walls
-                # again: else the room looks the same from both (a rectangle turned by 180°)
-                if loop_closer.looks_alike(inverse(jump), rival, fork.keys, fork.grid, fork.poses):
-                    continue
-                found = loop_closer.close(k, estimates, version, drift, pose=rival, before=fork.key,
-                                          window=self.window)
-                best = max(found, key=lambda lc: lc.score * lc.weight, default=None)
-                if best is None or best.weight < self.cfg.fork_weight or \
-                        best.score <= (1.0 + self.cfg.fork_gain) * chosen:
-                    continue
-                self.open = [f for f in self.open if f.key < fork.key]
-                return Decision(fork.key, jump, best)
+            rival = compose(jump, estimates[k])
+            # the map around the rival's place, carried back to the chosen one, must not land on walls
+            # again: else the room looks the same from both (a rectangle turned by 180°)
+            if loop_closer.looks_alike(inverse(jump), rival, fork.keys, fork.grid, fork.poses):
+                continue
+            found = loop_closer.close(k, estimates, version, drift, pose=rival, before=fork.key)
+            best = max(found, key=lambda lc: lc.score * lc.weight, default=None)
+            if best is None or best.weight < self.cfg.fork_weight or \
+                    best.score <= (1.0 + self.cfg.fork_gain) * chosen:
+                continue
+            self.open = [f for f in self.open if f.key < fork.key]
+            return Decision(switches, best)
         return None

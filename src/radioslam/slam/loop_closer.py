@@ -111,11 +111,10 @@ class LoopCloser:
 
     def close(self, k: int, estimates: dict[int, np.ndarray], version: int,
               drift: Callable[[int, int, float], np.ndarray], pose: np.ndarray | None = None,
-              before: int | None = None, window: tuple[float, float] | None = None) -> list[LoopClosure]:
+              before: int | None = None) -> list[LoopClosure]:
         """Verified loop closures of scan k against older submaps near its pose (or near ``pose``
-        instead, only submaps of scans before ``before``, searched ±``window`` (metres, radians)
-        instead of the loop window); ``drift(anchor, k, distance)`` is the covariance the odometry
-        accumulated between the two poses."""
+        instead, and only submaps of scans before ``before``); ``drift(anchor, k, distance)`` is the
+        covariance the odometry accumulated between the two poses."""
         current = estimates[k] if pose is None else pose
         margin = max(2 * self.front_cfg.window_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
         found = []
@@ -128,7 +127,7 @@ class LoopCloser:
             matcher = self._matcher(s, estimates, version, margin)
             predicted = between(estimates[s.anchor], current)
             loop = self._match(matcher, self.points[k], predicted, drift(s.anchor, k, np.linalg.norm(predicted[:2])),
-                               s.anchor, k, window)
+                               s.anchor, k)
             if loop is not None and loop.weight > 0:
                 found.append(loop)
             elif loop is not None and pose is None:
@@ -136,12 +135,12 @@ class LoopCloser:
         return found
 
     def _match(self, matcher: BranchAndBound, points: ScanPoints, predicted: np.ndarray, drift: np.ndarray,
-               anchor: int, key: int, window: tuple[float, float] | None = None) -> LoopClosure | None:
+               anchor: int, key: int) -> LoopClosure | None:
         """A verified, weighted loop closure of the scan against a submap's matcher (anchor frame)."""
         c, step = self.cfg, np.radians(self.front_cfg.angle_step_deg)
         grid = matcher.grid
-        window_m, window_rad = window or (c.window_m, np.radians(c.window_deg))
-        found = matcher.match(points.xy, points.normals, predicted, window_m, window_rad, step, c.min_score)
+        found = matcher.match(points.xy, points.normals, predicted, c.window_m, np.radians(c.window_deg), step,
+                              c.min_score)
         if found.pose is None:
             return None
         # the response surface around the winner gives the covariance (Olson 2009 §IV)
