@@ -51,7 +51,7 @@ class LoopClosure:
     relative: np.ndarray  # the current pose in the anchor's frame
     covariance: np.ndarray  # already divided by the weight
     score: float
-    weight: float = 1.0  # in (0, 1]: how far inside the acceptance tests it lies (0: contradicted, not used)
+    weight: float = 1.0  # in (0, 1]: how far inside the acceptance tests it lies
     relocalization: bool = False  # places a lost scan: the graph must keep it
 
 
@@ -76,9 +76,6 @@ class LoopCloser:
     submaps: list[Submap] = field(default_factory=list)
     points: dict[int, ScanPoints] = field(default_factory=dict)
     matchers: dict[int, tuple[int, BranchAndBound]] = field(default_factory=dict)  # anchor → (solution, matcher)
-    # scan → the last scan of each submap it matched fully (score beyond the ramp, not degenerate) where the
-    # trajectory says it cannot be (χ² beyond the gate): the scans agree with an older map, the poses do not
-    contradicted: dict[int, list[int]] = field(default_factory=dict)
 
     @property
     def floor(self) -> np.ndarray:
@@ -128,10 +125,8 @@ class LoopCloser:
             predicted = between(estimates[s.anchor], current)
             loop = self._match(matcher, self.points[k], predicted, drift(s.anchor, k, np.linalg.norm(predicted[:2])),
                                s.anchor, k)
-            if loop is not None and loop.weight > 0:
+            if loop is not None:
                 found.append(loop)
-            elif loop is not None and pose is None:
-                self.contradicted.setdefault(k, []).append(s.keys[-1])
         return found
 
     def _match(self, matcher: BranchAndBound, points: ScanPoints, predicted: np.ndarray, drift: np.ndarray,
@@ -148,13 +143,11 @@ class LoopCloser:
         score_weight = smooth_step((local.score - c.min_score) / c.score_ramp)
         chi2 = mahalanobis2(pose, predicted, drift + local.covariance + self.floor)
         weight = score_weight * smooth_step(2.0 * (c.gate_chi2 - chi2) / c.gate_chi2)
-        if weight <= 0.0 and score_weight < 1.0:
+        if weight <= 0.0:
             return None
         # the points that agree with the submap must fix every direction (Zhang et al. 2016)
         if self.degeneracy.matched_weak(grid, pose, points.xy, points.normals, local.covariance) is not None:
             return None
-        if weight <= 0.0:  # a full match the trajectory contradicts: weight 0, kept out of the graph
-            return LoopClosure(anchor, key, pose, local.covariance + self.floor, local.score, 0.0)
         return LoopClosure(anchor, key, pose, (local.covariance + self.floor) / weight, local.score, weight)
 
     def _local_fit(self, grid: LikelihoodGrid, points: ScanPoints, start: np.ndarray):
