@@ -14,6 +14,7 @@ import numpy as np
 from radioslam.slam.config import MotionConfig, PoseGraphConfig
 from radioslam.slam.front_end import Step
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
+from radioslam.slam.motion import jump_covariance
 from radioslam.slam.pose_graph import PoseGraph, local_covariance
 from radioslam.slam.se2 import between, compose, inverse, pose_covariance
 
@@ -24,8 +25,7 @@ class BackEnd:
         self.graph = PoseGraph(prior_sigmas=np.array([cfg.prior_sigma_m, cfg.prior_sigma_m,
                                                       np.radians(cfg.prior_sigma_deg)]))
         self.odometry_noise = pose_covariance(motion.odometry_sigma_m, motion.odometry_sigma_deg)
-        # a step the front end did not see (a kidnap, a branch left): next to no information
-        self.jump_covariance = pose_covariance(motion.relocalized_sigma_m, motion.relocalized_sigma_deg)
+        self.jump_covariance = jump_covariance(motion)  # a step the front end did not see (a kidnap, a branch left)
         self.step_factor: dict[int, int] = {}  # the front-end between factor into each pose
         self.estimates: dict[int, np.ndarray] = {}  # the latest solution, every pose so far
         self.chain: dict[int, np.ndarray] = {}  # the front end's steps composed: no loops, no optimization

@@ -56,9 +56,13 @@ class Fork:
 
     key: int
     rivals: np.ndarray  # (R, 3) each rival's pose in the frame of pose key − 1
-    keys: list[int]  # the scans before it
-    grid: LikelihoodGrid  # their map
-    poses: dict[int, np.ndarray]  # their poses then
+    grid: LikelihoodGrid  # the map of the scans before it
+    poses: dict[int, np.ndarray]  # those scans' poses then
+
+    @property
+    def keys(self) -> list[int]:
+        """The scans before it."""
+        return list(self.poses)
 
     def jumps(self, estimates: dict[int, np.ndarray]) -> np.ndarray:
         """(R, 3) world transforms carrying the chosen branch (latest estimates) onto each rival's."""
@@ -99,7 +103,7 @@ class Forks:
         if not len(turned) or not keys:
             return
         self.open = self.open[len(self.open) + 1 - self.cfg.fork_limit:]  # the latest fork_limit − 1
-        self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned]), keys,
+        self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned]),
                               loop_closer.whole_map(keys, estimates)[0], {m: estimates[m] for m in keys}))
 
     def _contradicted(self, fork: Fork, k: int, estimates: dict[int, np.ndarray], loop_closer: LoopCloser) -> bool:

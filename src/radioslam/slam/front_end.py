@@ -26,7 +26,7 @@ from radioslam.slam.config import FrontEndConfig, GridConfig, MotionConfig, Scan
 from radioslam.slam.correlative import candidate_likelihoods, correlative_match
 from radioslam.slam.degeneracy import DegeneracyTest, remap
 from radioslam.slam.grid import LikelihoodGrid
-from radioslam.slam.motion import Hypothesis, MotionHypothesis, MotionModel
+from radioslam.slam.motion import Hypothesis, MotionHypothesis, MotionModel, jump_covariance
 from radioslam.slam.refine import fit_score, refine_pose
 from radioslam.slam.rotation_search import HeadingSearch
 from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points
@@ -72,8 +72,7 @@ class FrontEnd:
         self.heading_search = HeadingSearch.from_config(cfg)
         self.floor = pose_covariance(cfg.floor_sigma_m, cfg.floor_sigma_deg)
         self.predicted = pose_covariance(motion_cfg.predicted_sigma_m, motion_cfg.predicted_sigma_deg)
-        # a relocalized scan's jump from the pose before it: next to no information (the relocalization fixes it)
-        self.jump = pose_covariance(motion_cfg.relocalized_sigma_m, motion_cfg.relocalized_sigma_deg)
+        self.jump = jump_covariance(motion_cfg)  # a relocalized scan's step: the relocalization fixes the pose
         self.keys: list[int] = []  # scans of the local map, oldest first
         self.points: dict[int, ScanPoints] = {}
 

@@ -19,7 +19,8 @@ from enum import Enum
 
 import numpy as np
 
-from radioslam.slam.se2 import between, compose
+from radioslam.slam.config import MotionConfig
+from radioslam.slam.se2 import between, compose, pose_covariance
 
 
 class MotionHypothesis(str, Enum):
@@ -81,6 +82,12 @@ class MotionModel:
         self.velocity = None if step is None else np.asarray(step, dtype=np.float64)
         if step is not None and observed and abs(step[2]) < self.straight_rad:
             self.speeds.append(float(np.linalg.norm(step[:2])))
+
+
+def jump_covariance(cfg: MotionConfig) -> np.ndarray:
+    """The covariance of a step the front end did not see (a relocalization, a kidnap, a branch
+    left): next to no information, isotropic in position (the same in every frame)."""
+    return pose_covariance(cfg.relocalized_sigma_m, cfg.relocalized_sigma_deg)
 
 
 def pace_prediction(prediction: np.ndarray, last: np.ndarray, speeds: list[float], scans: int) -> np.ndarray:
