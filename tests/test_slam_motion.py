@@ -85,7 +85,10 @@ def test_relocalization_finds_a_scan_taken_elsewhere_in_the_mapped_room():
     scans = sensed(scene, 5)
     cfg = SlamConfig()
     mapped = RadioSlam(cfg).run(scans[:12])
-    closer = LoopCloser.from_config(cfg)
+    # the 12 scans' map explains about a third of this scan (0.34 against a map at the true poses):
+    # the default acceptance score (0.35) sits on it, and this test is about where the search places it
+    closer = LoopCloser.from_config(cfg.model_copy(update={"loop_closure": cfg.loop_closure.model_copy(
+        update={"relocalize_min_score": 0.3})}))
     frame = walk[0]
     estimates = {k: mapped.poses[k] for k in range(12)}
     for k in range(12):

@@ -56,10 +56,11 @@ class BranchAndBound:
 
     def _scores(self, cells, normals, phasor, nodes, level):
         """Mean bound (N,) of nodes (angle index, ox, oy) at ``level``; exact with normals at 0.
-        ``phasor`` holds the world-normal phasors (A, P) of the points at each heading."""
+        ``phasor`` holds the world-normal phasors (A, P) of the points at each heading (None: left out,
+        a bound of the score with them)."""
         a, ox, oy = nodes[:, 0], nodes[:, 1], nodes[:, 2]
         x, y = cells[a, :, 0] + ox[:, None], cells[a, :, 1] + oy[:, None]  # (N, P)
-        world_normal = phasor[a] if level == 0 else None
+        world_normal = phasor[a] if level == 0 and phasor is not None else None
         return self.grid.likelihood_at(x, y, ~np.isnan(normals), world_normal, self.pyramid[level]).mean(axis=1)
 
     def _children(self, nodes, level, reach):
@@ -98,6 +99,9 @@ class BranchAndBound:
 
         threshold, evaluated = min_score, 0
         for level in range(self.levels, -1, -1):
+            if level == 0:  # the leaves' scores without the normal agreement bound theirs with it: only
+                # the leaves that bound keeps are scored with it (a sixth of them, at a fifth of the cost each)
+                nodes = nodes[self._scores(cells, normals, None, nodes, 0) >= threshold]
             bound = self._scores(cells, normals, phasor, nodes, level)
             evaluated += len(nodes)
             if level > 0:

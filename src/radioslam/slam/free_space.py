@@ -19,20 +19,25 @@ import numpy as np
 
 
 def free_samples(xy: np.ndarray, normals: np.ndarray, stop: float, pose_radius: float, spacing: float) -> np.ndarray:
-    """Terminal-frame sample points (F, 2), ``spacing`` apart, of the free space one scan shows:
-    each arc's normal line from the terminal to ``stop`` short of its foot, and a disc of
-    ``pose_radius`` around the terminal."""
+    """Terminal-frame sample points (F, 2) of the free space one scan shows: a disc of
+    ``pose_radius`` around the terminal, then each arc's normal line from the disc's edge to
+    ``stop`` short of its foot, ``spacing`` apart. The disc's samples lie on a square lattice
+    √2 × ``spacing`` apart: a cell of side 2 × ``spacing`` (the grid's, at half-cell spacing) holds
+    one of them however the scan is turned (the lattice's covering radius is half that side)."""
+    samples = []
+    start = 0.0
+    if pose_radius > 0:
+        g = np.arange(-pose_radius, pose_radius + 1e-9, np.sqrt(2) * spacing)
+        gx, gy = np.meshgrid(g - g.mean(), g - g.mean(), indexing="ij")
+        disc = np.stack([gx.ravel(), gy.ravel()], axis=1)
+        samples.append(disc[np.linalg.norm(disc, axis=1) <= pose_radius])
+        start = pose_radius
     known = ~np.isnan(normals)
     phi, index = np.unique(normals[known], return_index=True)  # one line per arc (its points share φ)
-    reach = np.linalg.norm(xy[known][index], axis=1) - stop
+    reach = np.linalg.norm(xy[known][index], axis=1) - stop - start
     phi, reach = phi[reach > 0], reach[reach > 0]
     count = np.ceil(reach / spacing).astype(np.int64)
     line = np.repeat(np.arange(len(phi)), count)
-    along = (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)) * spacing
-    samples = [np.stack([along * np.cos(phi[line]), along * np.sin(phi[line])], axis=1)]
-    if pose_radius > 0:
-        g = np.arange(-pose_radius, pose_radius + 1e-9, spacing)
-        gx, gy = np.meshgrid(g, g, indexing="ij")
-        disc = np.stack([gx.ravel(), gy.ravel()], axis=1)
-        samples.append(disc[np.linalg.norm(disc, axis=1) <= pose_radius])
+    along = start + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)) * spacing
+    samples.append(np.stack([along * np.cos(phi[line]), along * np.sin(phi[line])], axis=1))
     return np.concatenate(samples)

@@ -27,7 +27,7 @@ from radioslam.slam.correlative import candidate_likelihoods, correlative_match
 from radioslam.slam.degeneracy import DegeneracyTest, remap
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.motion import Hypothesis, MotionHypothesis, MotionModel, jump_covariance
-from radioslam.slam.refine import fit_score, refine_pose
+from radioslam.slam.refine import fit_scores, refine_poses
 from radioslam.slam.rotation_search import HeadingSearch
 from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points
 from radioslam.slam.se2 import between, pose_covariance, wrap_angle
@@ -109,9 +109,8 @@ class FrontEnd:
                                  cfg.refined_candidates)
         # each candidate refined off the lattice and scored on the interpolated field: a pose between
         # cells must not lose to one that happens to sit on the lattice
-        candidates = np.array([refine_pose(grid, xy, phi, c, self.grid_cfg.resolution_m, self.step_rad)
-                               for c in candidates])
-        scores = np.array([fit_score(grid, xy, phi, c) for c in candidates])
+        candidates = refine_poses(grid, xy, phi, candidates, self.grid_cfg.resolution_m, self.step_rad)
+        scores = fit_scores(grid, xy, phi, candidates)
         discount = self._prior_discount(candidates, hypotheses)
         adjusted = scores * (1.0 - discount)
         # the scans cannot tell apart what scores within the margin of the best: there the motion decides
