@@ -9,6 +9,8 @@ The solver is Levenberg–Marquardt on the three pose parameters with the analyt
 Nielsen's damping update), the step clipped to the box ±(max_shift, max_turn) around the
 start. Three unknowns need a 3 × 3 solve per iteration; a general solver's per-call
 overhead (scipy's ``least_squares``: ≈ 6 ms per scan here) costs more than the fit itself.
+The front end's candidates are refined side by side (one batched solve per iteration, each
+candidate its own damping), so their number costs array length, not Python calls.
 """
 
 from __future__ import annotations

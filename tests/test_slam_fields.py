@@ -1,0 +1,79 @@
+"""Invariants of the matchers' building blocks that their speed-ups must keep: the normal
+agreement never above 1 (branch and bound's bound without it stays admissible), candidates
+refined side by side exactly as one by one, and a scan's free disc marking every cell inside it
+whatever the heading."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from radioslam.slam.free_space import free_samples
+from radioslam.slam.grid import LikelihoodGrid, phasor_agreement, phasors
+from radioslam.slam.refine import fit_scores, refine_poses
+from radioslam.slam.se2 import inverse, transform_points
+
+
+def test_normal_agreement_is_the_gaussian_of_the_angle_and_never_above_one(rng):
+    sigma = np.radians(1.0)
+    map_angle = rng.uniform(-np.pi, np.pi, 2000)
+    delta = rng.normal(0, 2 * sigma, 2000)
+    m = phasors(map_angle)
+    agree = phasor_agreement(m, np.abs(m) ** 2, phasors(map_angle + delta), sigma)
+    assert np.all(agree <= 1.0)
+    small = np.abs(delta) < 3 * sigma  # exp(−(1 − cos Δ)/σ²) ≈ exp(−Δ²/2σ²) there
+    assert np.allclose(agree[small], np.exp(-0.5 * (delta[small] / sigma) ** 2), atol=2e-3)
+    unknown = phasors(np.full(3, np.nan))  # either side unknown: no evidence either way
+    assert np.all(phasor_agreement(unknown, np.zeros(3), m[:3], sigma) == 1.0)
+    assert np.all(phasor_agreement(m[:3], np.ones(3), unknown, sigma) == 1.0)
+
+
+def test_candidates_refined_side_by_side_are_refined_as_one_by_one(rng):
+    t = rng.random((300, 1))
+    walls = np.concatenate([np.hstack([6 * t[:100] - 3, np.full((100, 1), -2.0)]),
+                            np.hstack([np.full((100, 1), 3.0), 4 * t[100:200] - 2]),
+                            np.hstack([np.full((100, 1), -3.0), 4 * t[200:] - 2])])
+    normals = np.concatenate([np.full(100, np.pi / 2), np.full(100, np.pi), np.zeros(100)])
+    grid = LikelihoodGrid.from_points(walls, 0.05, 0.05, 1.0, normals, np.radians(1.0), 0.5)
+    truth = np.array([0.3, 0.2, np.radians(4.0)])
+    scan = transform_points(inverse(truth), walls[::5]) + rng.normal(0, 0.01, (60, 2))
+    scan_normals = normals[::5] - truth[2]
+    starts = truth + rng.uniform(-1, 1, (5, 3)) * [0.05, 0.05, np.radians(0.5)]
+    together = refine_poses(grid, scan, scan_normals, starts, 0.05, np.radians(0.5))
+    alone = np.array([refine_poses(grid, scan, scan_normals, s, 0.05, np.radians(0.5))[0] for s in starts])
+    assert np.allclose(together, alone, atol=1e-12, rtol=0)
+    assert np.all(fit_scores(grid, scan, scan_normals, together) >= fit_scores(grid, scan, scan_normals, starts))
+    # the field puts each wall at the centres of the cells its points fall in: within half a cell
+    assert np.abs(together[:, :2] - truth[:2]).max() < 0.5 * grid.resolution + 0.01
+
+
+@given(st.floats(-np.pi, np.pi), st.floats(0, 1), st.floats(0, 1))
+@settings(max_examples=60, deadline=None)
+def test_the_free_disc_puts_a_sample_in_every_cell_inside_it_whatever_the_heading(heading, x, y):
+    resolution, radius = 0.05, 0.5
+    samples = free_samples(np.zeros((0, 2)), np.zeros(0), 0.3, radius, resolution / 2)
+    pose = np.array([x, y, heading])
+    world = transform_points(pose, samples)
+    hit = {tuple(c) for c in np.floor(world / resolution).astype(int)}
+    # every cell whose four corners lie inside the disc
+    lo = np.floor((pose[:2] - radius) / resolution).astype(int)
+    ix, iy = np.meshgrid(np.arange(lo[0], lo[0] + 22), np.arange(lo[1], lo[1] + 22), indexing="ij")
+    cells = np.stack([ix.ravel(), iy.ravel()], axis=1)
+    corners = (cells[:, None, :] + np.array([[0, 0], [1, 0], [0, 1], [1, 1]])[None]) * resolution
+    inside = np.all(np.linalg.norm(corners - pose[:2], axis=2) <= radius, axis=1)
+    assert inside.sum() > 250
+    missing = [tuple(c) for c in cells[inside] if tuple(c) not in hit]
+    assert not missing, f"{len(missing)} cells inside the disc without a sample"
+
+
+@pytest.mark.parametrize("stop", [0.0, 0.3])
+def test_free_lines_start_at_the_disc_and_end_short_of_the_foot(stop):
+    xy = np.array([[4.0, 0.0], [0.0, 2.0]])
+    normals = np.array([0.0, np.pi / 2])
+    samples = free_samples(xy, normals, stop, 0.5, 0.025)
+    r = np.linalg.norm(samples, axis=1)
+    on_lines = samples[r > 0.5 + 1e-9]
+    bearing = np.degrees(np.arctan2(on_lines[:, 1], on_lines[:, 0]))
+    assert set(np.round(bearing).astype(int)) == {0, 90}
+    assert np.linalg.norm(on_lines[bearing < 45], axis=1).max() == pytest.approx(4.0 - stop, abs=0.025)
+    assert np.linalg.norm(on_lines[bearing > 45], axis=1).max() == pytest.approx(2.0 - stop, abs=0.025)
