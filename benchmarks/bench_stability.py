@@ -21,8 +21,9 @@ from radioslam.slam import RadioSlam
 PERTURBATION_M = 1e-6
 
 
-def perturbed(scans, rng: np.random.Generator):
-    return [replace(s, range_m=s.range_m + rng.uniform(-PERTURBATION_M, PERTURBATION_M, len(s))) for s in scans]
+def perturbed(scans, rng: np.random.Generator, bound_m: float = PERTURBATION_M):
+    """The scans with every range moved by a uniform draw within ±``bound_m``."""
+    return [replace(s, range_m=s.range_m + rng.uniform(-bound_m, bound_m, len(s))) for s in scans]
 
 
 def main() -> None:
