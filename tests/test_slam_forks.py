@@ -129,24 +129,35 @@ def test_switching_carries_every_pose_since_the_fork_and_the_graph_keeps_the_riv
     np.testing.assert_allclose(back_end.chain[5], back_end.estimates[5], atol=1e-6)
 
 
-def test_a_u_turn_in_a_hall_taken_for_walking_on_is_found_by_the_loop_it_closes():
-    """A 28 m hall walked at a slant, a U-turn between two scans near its centre line: the front end
-    takes it for walking on (the rival turned by 180° scores within the margin), and the walk
-    back over the mapped hall then runs 3.3 m off. The rival's branch closes a loop with the map
-    from before the turn: taken, the walk is at its true place."""
+def test_a_u_turn_in_a_hall_taken_for_walking_on_is_found_by_the_loop_it_closes(monkeypatch):
+    """A 28 m hall walked at a slant, a U-turn between two scans near its centre line. Where the
+    front end takes it for walking on (the motion deciding among candidates within the margin, as it
+    did before ``front_end.choose`` let a turn the scan shows clearly win), the walk back over the
+    mapped hall runs 3.3 m off; the rival's branch closes a loop with the map from before the turn:
+    taken, the walk is at its true place. With ``choose`` the front end takes the U-turn itself."""
     from test_slam_motion import sensed
 
     from radioslam.eval.trajectory_metrics import ate_rmse
     from radioslam.scene.procedural import MotionKind, RoomKind, generate_case
+    from radioslam.slam import front_end
+
+    def motion_decides(candidates, scores, discount, margin, turn_rad, trusted):
+        adjusted = scores * (1.0 - discount)
+        close = np.flatnonzero(adjusted >= (1.0 - margin) * adjusted.max())
+        return int(close[np.argmin(discount[close])])
 
     case = generate_case(RoomKind.HALL, MotionKind.RANDOM, 13, max_poses=24)
     scans = sensed(case.scene, case.seed)
-    without = RadioSlam(SlamConfig.model_validate({"loop_closure": {"fork_limit": 0}})).run(scans)
-    result = RadioSlam().run(scans)
+    no_forks = SlamConfig.model_validate({"loop_closure": {"fork_limit": 0}})
+    with monkeypatch.context() as patched:
+        patched.setattr(front_end, "choose", motion_decides)
+        without = RadioSlam(no_forks).run(scans)
+        result = RadioSlam().run(scans)
     assert ate_rmse(without.poses, case.scene.poses) > 1.0
     assert ate_rmse(result.poses, case.scene.poses) <= 0.2
     assert result.status[11] is ScanStatus.AMBIGUOUS
     assert any(w.startswith("scan 11:") and "rival taken" in w for w in result.warnings)
+    assert ate_rmse(RadioSlam(no_forks).run(scans).poses, case.scene.poses) <= 0.2
 
 
 def test_two_open_forks_are_also_tested_together_latest_switch_first():

@@ -8,11 +8,12 @@ that the rotation comes from the scan itself: the candidates of the global rotat
 constant velocity, the last turn repeated, odometry) are all searched, each over every
 translation within ``max_step_m`` of the last pose, by one branch-and-bound search
 (Hess et al. 2016 §V). Distinct candidates within ``ambiguity_margin`` of the best make
-the scan ambiguous: the one nearest the primary hypothesis is taken, its covariance widened
-over the others. The winner's response surface gives the covariance (Olson 2009 §IV) and a
-least-squares fit refines it. A direction no wall fixes keeps the paced prediction
-(Zhang et al. 2016). A weak match is weighed against the prediction smoothly; one the map
-does not support at all is lost, for the loop closer to relocalize.
+the scan ambiguous: the one nearest the motion is taken, its covariance widened over the others,
+unless the scan shows a turned one clearly better (:func:`choose`). The winner's response
+surface gives the covariance (Olson 2009 §IV) and a least-squares fit refines it. A direction
+no wall fixes keeps the paced prediction (Zhang et al. 2016). A weak match is weighed against
+the prediction smoothly; one the map does not support at all is lost, for the loop closer to
+relocalize.
 """
 
 from __future__ import annotations
@@ -59,6 +60,22 @@ def fuse(pose: np.ndarray, covariance: np.ndarray, weight: float, prior: np.ndar
     fused[2] = wrap_angle(fused[2])
     fused_cov = prior_covariance @ inner @ covariance  # (I − K)·C/w, without dividing by w
     return fused, 0.5 * (fused_cov + fused_cov.T)
+
+
+def choose(candidates: np.ndarray, scores: np.ndarray, discount: np.ndarray, margin: float, turn_rad: float,
+           trusted: float) -> int:
+    """The candidate (C, 3) a scan is registered at, from its scores (C,) and motion-prior discounts (C,).
+    What scores within ``margin`` of the best discounted score the scan cannot tell apart: there the
+    motion decides (the smallest discount), unless the scan itself explains a candidate turned ≥
+    ``turn_rad`` from that choice clearly better (its own score beyond the margin of the choice's, and
+    ``trusted`` at least): then the turn is seen in the scan, and its discount already holds the
+    motion (not counted twice), so the best discounted of those is taken."""
+    adjusted = scores * (1.0 - discount)
+    close = np.flatnonzero(adjusted >= (1.0 - margin) * adjusted.max())
+    chosen = int(close[np.argmin(discount[close])])
+    turned = close[np.abs(wrap_angle(candidates[close, 2] - candidates[chosen, 2])) >= turn_rad]
+    seen = turned[(scores[turned] * (1.0 - margin) > scores[chosen]) & (scores[turned] >= trusted)]
+    return int(seen[np.argmax(adjusted[seen])]) if len(seen) else chosen
 
 
 class FrontEnd:
@@ -113,14 +130,14 @@ class FrontEnd:
         scores = fit_scores(grid, xy, phi, candidates)
         discount = self._prior_discount(candidates, hypotheses)
         adjusted = scores * (1.0 - discount)
-        # the scans cannot tell apart what scores within the margin of the best: there the motion decides
-        close = np.flatnonzero(adjusted >= (1.0 - cfg.ambiguity_margin) * adjusted.max())
-        chosen = int(close[np.argmin(discount[close])])
+        chosen = choose(candidates, scores, discount, cfg.ambiguity_margin, np.radians(cfg.distinct_deg),
+                        cfg.min_match_score + cfg.trust_ramp)
         # rivals: what the scan alone cannot tell from the choice (within the margin of its score, or above);
-        # those the motion could not tell apart either widen the covariance
-        rivals = candidates[np.setdiff1d(np.flatnonzero(scores >= (1.0 - cfg.ambiguity_margin) * scores[chosen]),
-                                         [chosen])]
-        undecided = candidates[np.setdiff1d(close, [chosen])]
+        # those the motion could not tell apart either (within the margin of the best discounted score)
+        # widen the covariance
+        alike = np.setdiff1d(np.flatnonzero(scores >= (1.0 - cfg.ambiguity_margin) * scores[chosen]), [chosen])
+        close = np.flatnonzero(adjusted >= (1.0 - cfg.ambiguity_margin) * adjusted.max())
+        rivals, undecided = candidates[alike], candidates[np.intersect1d(alike, close)]
         pose, score = candidates[chosen], float(scores[chosen])
         contradicted = float(np.mean(candidate_likelihoods(grid, xy, phi, pose, np.zeros(1), np.zeros(1, int)) < 0))
         # the response surface around it gives the covariance (Olson 2009 §IV)
