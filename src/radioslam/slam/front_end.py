@@ -130,6 +130,7 @@ class FrontEnd:
         scores = fit_scores(grid, xy, phi, candidates)
         discount = self._prior_discount(candidates, hypotheses)
         adjusted = scores * (1.0 - discount)
+        # the motion decides what the scan cannot tell apart, and no more
         chosen = choose(candidates, scores, discount, cfg.ambiguity_margin, np.radians(cfg.distinct_deg),
                         cfg.min_match_score + cfg.trust_ramp)
         # rivals: what the scan alone cannot tell from the choice (within the margin of its score, or above);
