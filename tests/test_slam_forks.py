@@ -144,7 +144,7 @@ def test_a_u_turn_in_a_hall_taken_for_walking_on_is_found_by_the_loop_it_closes(
     def motion_decides(candidates, scores, discount, margin, turn_rad, trusted):
         adjusted = scores * (1.0 - discount)
         close = np.flatnonzero(adjusted >= (1.0 - margin) * adjusted.max())
-        return int(close[np.argmin(discount[close])])
+        return int(close[np.argmin(discount[close])]), close
 
     case = generate_case(RoomKind.HALL, MotionKind.RANDOM, 13, max_poses=24)
     scans = sensed(case.scene, case.seed)

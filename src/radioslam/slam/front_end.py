@@ -63,19 +63,19 @@ def fuse(pose: np.ndarray, covariance: np.ndarray, weight: float, prior: np.ndar
 
 
 def choose(candidates: np.ndarray, scores: np.ndarray, discount: np.ndarray, margin: float, turn_rad: float,
-           trusted: float) -> int:
-    """The candidate (C, 3) a scan is registered at, from its scores (C,) and motion-prior discounts (C,).
-    What scores within ``margin`` of the best discounted score the scan cannot tell apart: there the
-    motion decides (the smallest discount), unless the scan itself explains a candidate turned ≥
-    ``turn_rad`` from that choice clearly better (its own score beyond the margin of the choice's, and
-    ``trusted`` at least): then the turn is seen in the scan, and its discount already holds the
-    motion (not counted twice), so the best discounted of those is taken."""
+           trusted: float) -> tuple[int, np.ndarray]:
+    """The candidate (C, 3) a scan is registered at, from its scores (C,) and motion-prior discounts (C,),
+    and the indices of those within ``margin`` of the best discounted score (the scan cannot tell them
+    apart): among those the motion decides (the smallest discount), unless the scan itself explains a
+    candidate turned ≥ ``turn_rad`` from that choice clearly better (its own score beyond the margin of
+    the choice's, and ``trusted`` at least): then the turn is seen in the scan, and its discount already
+    holds the motion (not counted twice), so the best discounted of those is taken."""
     adjusted = scores * (1.0 - discount)
     close = np.flatnonzero(adjusted >= (1.0 - margin) * adjusted.max())
     chosen = int(close[np.argmin(discount[close])])
     turned = close[np.abs(wrap_angle(candidates[close, 2] - candidates[chosen, 2])) >= turn_rad]
     seen = turned[(scores[turned] * (1.0 - margin) > scores[chosen]) & (scores[turned] >= trusted)]
-    return int(seen[np.argmax(adjusted[seen])]) if len(seen) else chosen
+    return (int(seen[np.argmax(adjusted[seen])]) if len(seen) else chosen), close
 
 
 class FrontEnd:
@@ -129,15 +129,12 @@ class FrontEnd:
         candidates = refine_poses(grid, xy, phi, candidates, self.grid_cfg.resolution_m, self.step_rad)
         scores = fit_scores(grid, xy, phi, candidates)
         discount = self._prior_discount(candidates, hypotheses)
-        adjusted = scores * (1.0 - discount)
         # the motion decides what the scan cannot tell apart, and no more
-        chosen = choose(candidates, scores, discount, cfg.ambiguity_margin, np.radians(cfg.distinct_deg),
-                        cfg.min_match_score + cfg.trust_ramp)
+        chosen, close = choose(candidates, scores, discount, cfg.ambiguity_margin, np.radians(cfg.distinct_deg),
+                               cfg.min_match_score + cfg.trust_ramp)
         # rivals: what the scan alone cannot tell from the choice (within the margin of its score, or above);
-        # those the motion could not tell apart either (within the margin of the best discounted score)
-        # widen the covariance
+        # those the motion could not tell apart either (``close``) widen the covariance
         alike = np.setdiff1d(np.flatnonzero(scores >= (1.0 - cfg.ambiguity_margin) * scores[chosen]), [chosen])
-        close = np.flatnonzero(adjusted >= (1.0 - cfg.ambiguity_margin) * adjusted.max())
         rivals, undecided = candidates[alike], candidates[np.intersect1d(alike, close)]
         pose, score = candidates[chosen], float(scores[chosen])
         contradicted = float(np.mean(candidate_likelihoods(grid, xy, phi, pose, np.zeros(1), np.zeros(1, int)) < 0))
