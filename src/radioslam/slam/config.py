@@ -177,6 +177,31 @@ class PoseGraphConfig(_Section):
     prior_sigma_deg: float = Field(5.7e-4, gt=0)
 
 
+class PlaneAdjustmentConfig(_Section):
+    """The last solve (:mod:`radioslam.slam.plane_adjustment`): poses and the walls their specular
+    arcs face, adjusted together."""
+
+    enabled: bool = True
+    # a sighting's noise: the arc's normal bearing and its strongest echo's range (sd 0.14–0.23° and
+    # 1.2–1.7 cm on paper-cnv's four walls at the true poses, 10 dB)
+    bearing_sigma_deg: float = Field(0.2, gt=0)
+    range_sigma_m: float = Field(0.015, gt=0)
+    # a sighting joins the nearest wall within these gates at the pose graph's poses (its errors:
+    # centimetres and tenths of a degree, times the distance); a wall seen from fewer scans is left out
+    gate_deg: float = Field(3.0, gt=0)
+    gate_m: float = Field(0.3, gt=0)
+    min_sightings: int = Field(3, ge=2)
+    # Tukey's biweight of a sighting's normalized residual: 0 beyond this many σ
+    robust_c: float = Field(4.685, gt=0)
+    # each pose is held near the pose graph's with this sd (its errors), and the pose graph's steps at
+    # the front end's step covariance times step_inflation² (the
+    # scans' information is in both: not counted twice at full weight)
+    anchor_sigma_m: float = Field(0.05, gt=0)
+    anchor_sigma_deg: float = Field(0.5, gt=0)
+    step_inflation: float = Field(3.0, gt=0)
+    iterations: int = Field(30, ge=1)
+
+
 class MapConfig(_Section):
     """The occupancy grid and fused cloud written after the run (:mod:`radioslam.slam.occupancy`)."""
 
@@ -199,6 +224,7 @@ class SlamConfig(_Section):
     motion: MotionConfig = Field(default_factory=MotionConfig)
     loop_closure: LoopClosureConfig = Field(default_factory=LoopClosureConfig)
     pose_graph: PoseGraphConfig = Field(default_factory=PoseGraphConfig)
+    plane_adjustment: PlaneAdjustmentConfig = Field(default_factory=PlaneAdjustmentConfig)
     map: MapConfig = Field(default_factory=MapConfig)
 
 

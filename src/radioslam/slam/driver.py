@@ -23,6 +23,7 @@ from radioslam.slam.forks import Forks
 from radioslam.slam.front_end import FrontEnd, Step
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
 from radioslam.slam.lost_found import LostAndFound
+from radioslam.slam.plane_adjustment import PlaneAdjustment
 from radioslam.slam.scan_points import prepare_points
 from radioslam.slam.status import ScanStatus
 
@@ -98,12 +99,14 @@ class RadioSlam:
             BackEnd.from_config(cfg)
         lost_and_found, forks = LostAndFound(cfg.loop_closure), Forks.from_config(cfg)
         steps: list[Step] = []
+        sightings: list[np.ndarray] = []  # each scan's sightings of walls, for the last solve
         seconds, lost = [], 0  # lost: consecutive scans nothing matched
         contradiction = Contradiction(cfg.loop_closure.contradicted_fraction, cfg.loop_closure.relocalize_gain)
         for k, scan in enumerate(scans):
             tick = time.perf_counter()
             # 1. the scan's points and the specular normal of the wall each came from
             points = prepare_points(scan, cfg.scan, cfg.grid)
+            sightings.append(points.sightings)
             # 2. register it against the local map: the motion's hypotheses and the scan's own rotation candidates
             step = front_end.register(k, points, back_end.estimates)
             # 3. a lost scan (one of a stretch nothing matched, or one whose match puts points on space the map
@@ -150,13 +153,21 @@ class RadioSlam:
             steps.append(step)
             seconds.append(time.perf_counter() - tick)
         back_end.finish()
-        return self._result(steps, back_end, seconds, cfg.loop_closure.relocalize_after, cfg.motion.dead_reckoned_scans)
+        # 9. every pose adjusted together with the walls its specular arcs face (a smooth last solve)
+        tick = time.perf_counter()
+        poses = np.array([back_end.estimates[k] for k in range(len(steps))])
+        if cfg.plane_adjustment.enabled:
+            poses = PlaneAdjustment.from_config(cfg.plane_adjustment).refine(poses, sightings,
+                                                                             back_end.step_covariance).poses
+        seconds[-1] += time.perf_counter() - tick
+        return self._result(steps, poses, back_end, seconds, cfg.loop_closure.relocalize_after,
+                            cfg.motion.dead_reckoned_scans)
 
     @staticmethod
-    def _result(steps: list[Step], back_end: BackEnd, seconds: list[float], lost_after: int,
+    def _result(steps: list[Step], poses: np.ndarray, back_end: BackEnd, seconds: list[float], lost_after: int,
                 dead_reckoned_after: int) -> SlamResult:
         n = len(steps)
-        result = SlamResult(poses=np.array([back_end.estimates[k] for k in range(n)]),
+        result = SlamResult(poses=poses,
                             odometry=np.array([back_end.chain[k] for k in range(n)]),
                             status=[s.status for s in steps], match_score=np.array([s.score for s in steps]),
                             loops=back_end.loops, seconds_per_scan=np.array(seconds), lost_after=lost_after,

@@ -23,9 +23,17 @@ from radioslam.slam.se2 import wrap_angle
 
 def specular_normals(scan: Scan, arc_range_m: float) -> np.ndarray:
     """Terminal-frame bearing (P,) of the surface normal each point's echo came from; NaN: unknown."""
+    return specular_arcs(scan, arc_range_m)[0]
+
+
+def specular_arcs(scan: Scan, arc_range_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """The normals of :func:`specular_normals` (P,), and each specular arc's sighting of its
+    surface (A, 2): the normal's terminal-frame bearing φ and the range of the arc's strongest
+    point, the specular foot's distance (the surface is the line n(φ)·x = r in the terminal
+    frame: what :mod:`radioslam.slam.plane_adjustment` adjusts)."""
     normals = np.full(len(scan), np.nan)
     if len(scan) < 3:
-        return normals
+        return normals, np.zeros((0, 2))
     order = np.lexsort((scan.beam, scan.orientation))
     beam, orient = scan.beam[order], scan.orientation[order]
     rng, power = scan.range_m[order], scan.power_db[order]
@@ -50,7 +58,8 @@ def specular_normals(scan: Scan, arc_range_m: float) -> np.ndarray:
     phi = np.full(len(start), np.nan)
     phi[interior] = np.clip(vertex, x[:, 0], x[:, 2])
     normals[order] = wrap_angle(phi[arc] + boresight)
-    return normals
+    sightings = np.stack([wrap_angle(phi[interior] + boresight[k]), rng[k]], axis=1)
+    return normals, sightings
 
 
 def wall_points(scan: Scan, normals: np.ndarray) -> np.ndarray:

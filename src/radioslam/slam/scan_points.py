@@ -4,14 +4,14 @@ of the arc each came from (:mod:`radioslam.slam.normals`), and the free space th
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.config import GridConfig, ScanConfig
 from radioslam.slam.free_space import free_samples
-from radioslam.slam.normals import specular_normals, wall_points
+from radioslam.slam.normals import specular_arcs, wall_points
 from radioslam.slam.se2 import between, transform_points
 
 
@@ -20,17 +20,19 @@ class ScanPoints:
     xy: np.ndarray  # (P, 2)
     normals: np.ndarray  # (P,) NaN: no normal known
     free: np.ndarray  # (F, 2) terminal-frame samples of the space the scan saw through
+    sightings: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (A, 2) bearing, range of each arc's wall
 
     def __len__(self) -> int:
         return len(self.xy)
 
 
 def prepare_points(scan: Scan, cfg: ScanConfig, grid: GridConfig) -> ScanPoints:
-    """The scan's points with their specular normals and its free-space samples (half a cell apart)."""
-    phi = specular_normals(scan, cfg.arc_range_m)
+    """The scan's points with their specular normals, its free-space samples (half a cell apart) and
+    the sightings of the walls its specular arcs face."""
+    phi, sightings = specular_arcs(scan, cfg.arc_range_m)
     xy = wall_points(scan, phi) if cfg.project_arcs else scan.xy
     return ScanPoints(xy, phi, free_samples(xy, phi, grid.free_stop_m, grid.free_pose_radius_m,
-                                            grid.resolution_m / 2))
+                                            grid.resolution_m / 2), sightings)
 
 
 def fused_points(keys: list[int], poses: dict[int, np.ndarray], scans: dict[int, ScanPoints],

@@ -1,0 +1,132 @@
+"""The plane bundle adjustment (issue #12, point 6): walls sighted by the specular arcs fix the poses
+to about their sighting noise, smoothly in the inputs, and a ghost wall beside a real one does not
+pull them."""
+
+import numpy as np
+import pytest
+
+from radioslam.eval.trajectory_metrics import align, ate_rmse
+from radioslam.sensing.pointcloud import Scan
+from radioslam.slam.config import PlaneAdjustmentConfig, SlamConfig
+from radioslam.slam.normals import specular_arcs
+from radioslam.slam.plane_adjustment import PlaneAdjustment
+from radioslam.slam.se2 import pose_covariance, wrap_angle
+from radioslam.slam.wall_association import associate, world_lines
+
+# a 12 m × 8 m room: walls as (ψ, d), the normal bearing from inside and the offset n·x = d
+ROOM = np.array([[0.0, 6.0], [np.pi / 2, 4.0], [np.pi, 6.0], [-np.pi / 2, 4.0]])
+SIGMA = np.array([np.radians(0.15), 0.01])  # a sighting's bearing and range noise
+
+
+def walk(n: int = 40) -> np.ndarray:
+    """A loop around the room's centre, turning as it goes."""
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return np.stack([3.0 * np.cos(t), 2.0 * np.sin(t), wrap_angle(t + np.pi / 2)], axis=1)
+
+
+def sightings_of(poses: np.ndarray, walls: np.ndarray, rng: np.random.Generator) -> list[np.ndarray]:
+    """Each pose's sightings (φ, r) of every wall, with Gaussian noise of SIGMA."""
+    out = []
+    for x, y, th in poses:
+        r = walls[:, 1] - np.cos(walls[:, 0]) * x - np.sin(walls[:, 0]) * y  # distance to each line
+        phi = wrap_angle(walls[:, 0] - th)
+        out.append(np.stack([phi, r], axis=1) + rng.normal(0, 1, (len(walls), 2)) * SIGMA)
+    return out
+
+
+def pose_graph_like(truth: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """The truth with the errors of a pose graph: a smooth drift of centimetres and tenths of a
+    degree, and a few centimetres of jitter."""
+    t = np.linspace(0, 1, len(truth))[:, None]
+    drift = np.sin(2 * np.pi * t) * np.array([0.08, -0.06, np.radians(0.5)])
+    return truth + drift + rng.normal(0, 1, truth.shape) * np.array([0.02, 0.02, np.radians(0.2)])
+
+
+def steps(n: int) -> dict[int, np.ndarray]:
+    return {k: pose_covariance(0.03, 0.5) for k in range(1, n)}
+
+
+def position_rmse(estimate: np.ndarray, truth: np.ndarray) -> float:
+    """ATE: the frame is the pose graph's (the anchors hold it), so compared after alignment."""
+    return ate_rmse(estimate, truth)
+
+
+def refine(start, sightings, cfg=None):
+    return PlaneAdjustment.from_config(cfg or PlaneAdjustmentConfig()).refine(start, sightings, steps(len(start)))
+
+
+def test_walls_fix_the_poses_to_their_sighting_noise(rng):
+    truth = walk()
+    start = pose_graph_like(truth, rng)
+    result = refine(start, sightings_of(truth, ROOM, rng))
+    before, after = position_rmse(start, truth), position_rmse(result.poses, truth)
+    assert before > 0.04
+    assert after < 0.012  # ≈ σ_d / √2 per axis from two walls each
+    aligned, _ = align(result.poses, truth)
+    assert np.degrees(np.abs(wrap_angle(aligned[:, 2] - truth[:, 2]))).max() < 0.3
+    # the four walls found where they are
+    assert np.allclose(result.poses[0], start[0])  # the first pose still defines the map frame
+    assert len(result.walls) == 4 and result.sightings_used == result.sightings == 4 * len(truth)
+    # the walls in the map frame: every sighting lands on its wall from its refined pose
+    for pose, sighted in zip(result.poses, sightings_of(truth, ROOM, np.random.default_rng(0))):
+        psi, d = world_lines(np.broadcast_to(pose, (4, 3)), sighted)
+        nearest = np.argmin(np.abs(wrap_angle(psi[:, None] - result.walls[None, :, 0])), axis=1)
+        assert np.abs(d - result.walls[nearest, 1]).max() < 0.05
+    facing_y = np.abs(np.sin(result.walls[:, 0])) > 0.9
+    width, depth = result.walls[facing_y, 1].sum(), result.walls[~facing_y, 1].sum()
+    assert (width, depth) == (pytest.approx(8.0, abs=0.02), pytest.approx(12.0, abs=0.02))
+
+
+def test_the_result_is_smooth_in_the_ranges(rng):
+    """What point 6 asks of the whole SLAM, this stage meets by construction: 1 µm on every range
+    moves the poses by micrometres, not by a basin."""
+    truth = walk()
+    start = pose_graph_like(truth, rng)
+    sightings = sightings_of(truth, ROOM, rng)
+    nudged = [s + np.column_stack([np.zeros(len(s)), rng.uniform(-1e-6, 1e-6, len(s))]) for s in sightings]
+    a, b = refine(start, sightings).poses, refine(start, nudged).poses
+    assert np.abs(a[:, :2] - b[:, :2]).max() < 2e-5
+
+
+def test_a_ghost_wall_beside_a_real_one_does_not_pull_the_poses(rng):
+    """A double bounce seen as a wall 0.3 m in front of the north wall from half the walk (a
+    metal shelf's ghost): it joins the real wall's sightings at the gates, and must not move the
+    poses that see it."""
+    truth = walk()
+    start = pose_graph_like(truth, rng)
+    sightings = sightings_of(truth, ROOM, rng)
+    ghost = np.array([[np.pi / 2, 3.7]])
+    for k in range(len(truth) // 2):
+        sightings[k] = np.concatenate([sightings[k], sightings_of(truth[k:k + 1], ghost, rng)[0]])
+    result = refine(start, sightings)
+    assert position_rmse(result.poses, truth) < 0.015
+
+
+def test_poses_without_sightings_keep_the_pose_graph(rng):
+    truth = walk(10)
+    start = pose_graph_like(truth, rng)
+    result = refine(start, [np.zeros((0, 2))] * len(start))
+    assert np.array_equal(result.poses, start) and len(result.walls) == 0
+
+
+def test_association_gives_one_wall_per_surface_and_leaves_rare_ones_out(rng):
+    truth = walk(12)
+    sightings = sightings_of(truth, ROOM, rng)
+    sightings[3] = np.concatenate([sightings[3], [[0.3, 2.0]]])  # seen once: no wall
+    scan = np.repeat(np.arange(len(truth)), [len(s) for s in sightings])
+    label = associate(truth, scan, np.concatenate(sightings), np.radians(3), 0.3, 3)
+    assert set(label) == {-1, 0, 1, 2, 3} and np.count_nonzero(label < 0) == 1
+    psi, _ = world_lines(truth[scan], np.concatenate(sightings))
+    for wall in range(4):  # each wall holds the sightings of one surface
+        assert np.ptp(np.cos(psi[label == wall])) < 0.01
+
+
+def test_an_arc_sights_its_wall_at_the_normal_and_the_foot_range():
+    beams = np.arange(-6, 7)
+    angle = np.arcsin(2 * beams / 64)
+    power = -0.5 * ((np.degrees(angle) - 1.2) / 2.0) ** 2
+    scan = Scan(np.full(len(beams), 4.0), angle, power - power.max(), beams, np.zeros(len(beams), np.int64))
+    normals, sightings = specular_arcs(scan, SlamConfig().scan.arc_range_m)
+    assert sightings.shape == (1, 2)
+    assert np.degrees(sightings[0, 0]) == pytest.approx(1.2, abs=1e-6) and sightings[0, 1] == 4.0
+    assert np.allclose(normals, sightings[0, 0])
