@@ -23,7 +23,7 @@ from radioslam.slam.forks import Forks
 from radioslam.slam.front_end import FrontEnd, Step
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
 from radioslam.slam.lost_found import LostAndFound
-from radioslam.slam.plane_adjustment import PlaneAdjustment
+from radioslam.slam.plane_adjustment import PlaneAdjustment, PlaneAdjustmentResult
 from radioslam.slam.scan_points import prepare_points
 from radioslam.slam.status import ScanStatus
 
@@ -37,6 +37,8 @@ class SlamResult:
     loops: list[LoopClosure] = field(default_factory=list)  # relocalizations included
     warnings: list[str] = field(default_factory=list)
     seconds_per_scan: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    planes: PlaneAdjustmentResult | None = None  # the walls of the last solve (None: not run)
+    adjustment_seconds: float = 0.0  # the last solve's time (not in seconds_per_scan)
     lost_after: int = 2  # this many consecutive predicted scans are a lost stretch
     dead_reckoned_after: int = 10  # and this many consecutive scans none of which fixed one pose
 
@@ -156,12 +158,11 @@ class RadioSlam:
         # 9. every pose adjusted together with the walls its specular arcs face (a smooth last solve)
         tick = time.perf_counter()
         poses = np.array([back_end.estimates[k] for k in range(len(steps))])
-        if cfg.plane_adjustment.enabled:
-            poses = PlaneAdjustment.from_config(cfg.plane_adjustment).refine(poses, sightings,
-                                                                             back_end.step_covariance).poses
-        seconds[-1] += time.perf_counter() - tick
-        return self._result(steps, poses, back_end, seconds, cfg.loop_closure.relocalize_after,
-                            cfg.motion.dead_reckoned_scans)
+        adjusted = PlaneAdjustment.from_config(cfg.plane_adjustment).refine(poses, sightings, back_end.step_covariance) \
+            if cfg.plane_adjustment.enabled else None
+        result = self._result(steps, poses if adjusted is None else adjusted.poses, back_end, seconds,
+                              cfg.loop_closure.relocalize_after, cfg.motion.dead_reckoned_scans)
+        return replace(result, planes=adjusted, adjustment_seconds=time.perf_counter() - tick)
 
     @staticmethod
     def _result(steps: list[Step], poses: np.ndarray, back_end: BackEnd, seconds: list[float], lost_after: int,
