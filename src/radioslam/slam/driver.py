@@ -158,8 +158,8 @@ class RadioSlam:
         # 9. every pose adjusted together with the walls its specular arcs face (a smooth last solve)
         tick = time.perf_counter()
         poses = np.array([back_end.estimates[k] for k in range(len(steps))])
-        adjusted = PlaneAdjustment.from_config(cfg.plane_adjustment).refine(poses, sightings, back_end.step_covariance) \
-            if cfg.plane_adjustment.enabled else None
+        adjuster = PlaneAdjustment.from_config(cfg.plane_adjustment) if cfg.plane_adjustment.enabled else None
+        adjusted = adjuster.refine(poses, sightings, back_end.step_covariance) if adjuster else None
         result = self._result(steps, poses if adjusted is None else adjusted.poses, back_end, seconds,
                               cfg.loop_closure.relocalize_after, cfg.motion.dead_reckoned_scans)
         return replace(result, planes=adjusted, adjustment_seconds=time.perf_counter() - tick)

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.integrate import trapezoid
 from scipy.sparse.linalg import spsolve
 
 from radioslam.slam.config import PlaneAdjustmentConfig
@@ -118,14 +119,15 @@ def biweight_consistency(c: float) -> float:
         return 1.0
     u = np.linspace(0.0, c, 4001)
     density = u * np.exp(-0.5 * u**2) * tukey_weights(u, c)
-    return float(np.trapezoid(density * 0.5 * u**2, u) / np.trapezoid(density, u))
+    return float(trapezoid(density * 0.5 * u**2, u) / trapezoid(density, u))
 
 
 class _Problem:
     """Every pose and wall as one parameter vector (the anchors hold the gauge)."""
 
     def __init__(self, poses: np.ndarray, scan: np.ndarray, observed: np.ndarray, wall: np.ndarray,
-                 steps: tuple[np.ndarray, np.ndarray], sigma: np.ndarray, robust_c: float, anchor_sigma: np.ndarray):
+                 steps: tuple[np.ndarray, np.ndarray], sigma: np.ndarray, robust_c: float,
+                 anchor_sigma: np.ndarray):
         self.start, self.scan, self.observed, self.wall = poses, scan, observed, wall
         self.step, self.whiten = steps
         self.n_poses, self.n_walls = len(poses), int(wall.max()) + 1
@@ -142,7 +144,8 @@ class _Problem:
                             + 1j * np.bincount(self.wall, np.sin(psi), self.n_walls))
         return np.stack([mean_psi, np.bincount(self.wall, d, self.n_walls) / counts], axis=1)
 
-    def solve(self, iterations: int, widths: tuple[float, ...] = (8.0, 4.0, 2.0, 1.0)) -> tuple[np.ndarray, np.ndarray, int]:
+    def solve(self, iterations: int,
+              widths: tuple[float, ...] = (8.0, 4.0, 2.0, 1.0)) -> tuple[np.ndarray, np.ndarray, int]:
         """Graduated non-convexity (Blake & Zisserman 1987; Yang et al., "Graduated non-convexity for
         robust spatial perception", RA-L 2020): Tukey's support starts ``widths[0]`` times wider, where
         every sighting near its wall counts and the walls pull a stretch of poses the pose graph put a
@@ -172,7 +175,8 @@ class _Problem:
             r_trial, j_trial, w_trial = self._linearize(trial_poses, trial_walls)
             trial_cost = self._cost(r_trial, w_trial)
             if trial_cost < cost:
-                poses, walls, residual, jac, weight, cost = trial_poses, trial_walls, r_trial, j_trial, w_trial, trial_cost
+                poses, walls, cost = trial_poses, trial_walls, trial_cost
+                residual, jac, weight = r_trial, j_trial, w_trial
                 damping = max(damping / 3, 1e-9)
                 if np.max(np.abs(step)) < 1e-7:
                     break
@@ -274,5 +278,6 @@ class _Problem:
         jac = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                             shape=(n_rows, n_cols))
         residual = np.concatenate([np.stack([e_psi, e_d], axis=1).ravel(), step_res, anchor_res.ravel()])
-        weight = np.concatenate([np.repeat(tukey_weights(np.hypot(e_psi, e_d), self.c), 2), np.ones(3 * len(a) + 3 * self.n_poses)])
+        sighted = np.repeat(tukey_weights(np.hypot(e_psi, e_d), self.c), 2)
+        weight = np.concatenate([sighted, np.ones(3 * len(a) + 3 * self.n_poses)])
         return residual, jac, weight
