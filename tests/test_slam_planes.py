@@ -130,3 +130,40 @@ def test_an_arc_sights_its_wall_at_the_normal_and_the_foot_range():
     assert sightings.shape == (1, 2)
     assert np.degrees(sightings[0, 0]) == pytest.approx(1.2, abs=1e-6) and sightings[0, 1] == 4.0
     assert np.allclose(normals, sightings[0, 0])
+
+
+def test_a_scan_the_front_end_left_to_the_motion_model_is_placed_on_the_walls(rng):
+    """A predicted scan whose motion-model pose is 1 m and 60° off (the terminal came back from
+    elsewhere): the walls the other scans sighted place it; without the mark it stays where it was."""
+    truth = walk()
+    start = pose_graph_like(truth, rng)
+    start[15] = truth[15] + np.array([0.8, -0.6, np.radians(60.0)])
+    sightings = sightings_of(truth, ROOM, rng)
+    unplaced = np.zeros(len(truth), bool)
+    unplaced[15] = True
+    cfg = PlaneAdjustmentConfig()
+    placed = PlaneAdjustment.from_config(cfg).refine(start, sightings, steps(len(start)), unplaced).poses
+    kept = PlaneAdjustment.from_config(cfg).refine(start, sightings, steps(len(start))).poses
+    aligned, _ = align(placed, truth)
+    assert np.linalg.norm(aligned[15, :2] - truth[15, :2]) < 0.03
+    assert abs(np.degrees(wrap_angle(aligned[15, 2] - truth[15, 2]))) < 0.5
+    aligned_kept, _ = align(kept, truth)
+    assert np.linalg.norm(aligned_kept[15, :2] - truth[15, :2]) > 0.5
+
+
+def test_placement_refuses_a_symmetric_room(rng):
+    """From the middle of a square room every heading a quarter turn apart fits the four walls
+    equally: no correction is unambiguous, the scan is left where it was."""
+    from radioslam.slam.wall_placement import place
+
+    square = np.array([[0.0, 5.0], [np.pi / 2, 5.0], [np.pi, 5.0], [-np.pi / 2, 5.0]])
+    pose = np.array([0.0, 0.0, 0.3])
+    observed = sightings_of(pose[None], square, rng)[0]
+    assert place(pose + np.array([0.0, 0.0, np.radians(40.0)]), observed, square, np.pi, 1.5,
+                 np.radians(3.0), 0.1) is None
+    found = place(pose + np.array([0.4, 0.0, np.radians(5.0)]), observed[:3], square[:3], np.radians(30.0), 1.5,
+                  np.radians(3.0), 0.1)
+    assert found is not None  # three walls within ±30° fit one way only: put back where it was seen from
+    # a start for the solve, on the proposals' lattice (half a bearing gate, a quarter range gate)
+    assert np.allclose(found[0][:2], pose[:2], atol=0.05) and abs(np.degrees(found[0][2] - pose[2])) < 1.6
+    assert list(found[1]) == [0, 1, 2]

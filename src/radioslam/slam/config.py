@@ -199,6 +199,13 @@ class PlaneAdjustmentConfig(_Section):
     anchor_sigma_m: float = Field(0.05, gt=0)
     anchor_sigma_deg: float = Field(0.5, gt=0)
     step_inflation: float = Field(3.0, gt=0)
+    # a pose the front end left to the motion model (predicted, skipped) is first placed on
+    # the walls within this search (its step may be a jump the motion model did not see), then held
+    # to the pose graph's this loosely (the motion model's own uncertainty)
+    place_search_m: float = Field(1.5, gt=0)
+    place_search_deg: float = Field(180.0, gt=0)
+    loose_sigma_m: float = Field(1.5, gt=0)
+    loose_sigma_deg: float = Field(90.0, gt=0)
     iterations: int = Field(30, ge=1)
 
 

@@ -159,7 +159,8 @@ class RadioSlam:
         tick = time.perf_counter()
         poses = np.array([back_end.estimates[k] for k in range(len(steps))])
         adjuster = PlaneAdjustment.from_config(cfg.plane_adjustment) if cfg.plane_adjustment.enabled else None
-        adjusted = adjuster.refine(poses, sightings, back_end.step_covariance) if adjuster else None
+        unplaced = np.array([s.status in (ScanStatus.PREDICTED, ScanStatus.SKIPPED) for s in steps])
+        adjusted = adjuster.refine(poses, sightings, back_end.step_covariance, unplaced) if adjuster else None
         result = self._result(steps, poses if adjusted is None else adjusted.poses, back_end, seconds,
                               cfg.loop_closure.relocalize_after, cfg.motion.dead_reckoned_scans)
         return replace(result, planes=adjusted, adjustment_seconds=time.perf_counter() - tick)

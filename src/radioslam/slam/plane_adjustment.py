@@ -41,7 +41,8 @@ from scipy.sparse.linalg import spsolve
 from radioslam.slam.config import PlaneAdjustmentConfig
 from radioslam.slam.errors import SlamError
 from radioslam.slam.se2 import between, compose, inverse, wrap_angle
-from radioslam.slam.wall_association import associate
+from radioslam.slam.wall_association import associate, world_lines
+from radioslam.slam.wall_placement import place
 
 
 @dataclass(frozen=True)
@@ -56,9 +57,12 @@ class PlaneAdjustment:
     """Built from plain settings by :meth:`from_config`; :meth:`refine` after the pose graph."""
 
     def __init__(self, sigma: np.ndarray, gate_rad: float, gate_m: float, min_sightings: int, robust_c: float,
-                 anchor_sigma: np.ndarray, step_inflation: float, iterations: int):
+                 anchor_sigma: np.ndarray, step_inflation: float, iterations: int,
+                 search_rad: float = np.radians(15.0), search_m: float = 1.5,
+                 loose_sigma: np.ndarray = np.array([0.5, 0.5, np.radians(10.0)])):
         self.sigma, self.gate_rad, self.gate_m, self.min_sightings = sigma, gate_rad, gate_m, min_sightings
-        self.robust_c, self.anchor_sigma = robust_c, anchor_sigma
+        self.robust_c, self.anchor_sigma, self.loose_sigma = robust_c, anchor_sigma, loose_sigma
+        self.search_rad, self.search_m = search_rad, search_m
         self.step_inflation, self.iterations = step_inflation, iterations
 
     @classmethod
@@ -66,12 +70,16 @@ class PlaneAdjustment:
         return cls(np.array([np.radians(cfg.bearing_sigma_deg), cfg.range_sigma_m]), np.radians(cfg.gate_deg),
                    cfg.gate_m, cfg.min_sightings, cfg.robust_c,
                    np.array([cfg.anchor_sigma_m, cfg.anchor_sigma_m, np.radians(cfg.anchor_sigma_deg)]),
-                   cfg.step_inflation, cfg.iterations)
+                   cfg.step_inflation, cfg.iterations, np.radians(cfg.place_search_deg), cfg.place_search_m,
+                   np.array([cfg.loose_sigma_m, cfg.loose_sigma_m, np.radians(cfg.loose_sigma_deg)]))
 
-    def refine(self, poses: np.ndarray, sightings: list[np.ndarray],
-               step_covariance: dict[int, np.ndarray]) -> PlaneAdjustmentResult:
+    def refine(self, poses: np.ndarray, sightings: list[np.ndarray], step_covariance: dict[int, np.ndarray],
+               unplaced: np.ndarray | None = None) -> PlaneAdjustmentResult:
         """Poses (P, 3) refined with the scans' sightings (A_k, 2: bearing, range) of walls;
-        ``step_covariance[k]`` is the covariance of the step into pose k in pose k − 1's frame."""
+        ``step_covariance[k]`` is the covariance of the step into pose k in pose k − 1's frame;
+        ``unplaced`` (P,) marks the poses the front end left to the motion model (predicted,
+        skipped): each is first placed on the walls the others sighted
+        (:func:`radioslam.slam.wall_placement.place`) and held to the pose graph only loosely."""
         poses = np.asarray(poses, dtype=np.float64)
         if len(sightings) != len(poses):
             raise SlamError(f"{len(sightings)} sighting lists for {len(poses)} poses", field="(sightings)")
@@ -80,13 +88,16 @@ class PlaneAdjustment:
         local = poses - centre
         scan = np.repeat(np.arange(len(poses)), [len(s) for s in sightings])
         observed = np.concatenate([np.zeros((0, 2))] + [np.asarray(s, dtype=np.float64) for s in sightings])
+        unplaced = np.zeros(len(poses), bool) if unplaced is None else np.asarray(unplaced, bool)
         wall = associate(local, scan, observed, self.gate_rad, self.gate_m, self.min_sightings)
+        start, wall = self._place(local, scan, observed, wall, unplaced)
         if wall.max(initial=-1) < 0:
             return PlaneAdjustmentResult(poses.copy(), np.zeros((0, 2)), 0, total)
         keep = wall >= 0
         scan, observed, wall = scan[keep], observed[keep], wall[keep]
-        problem = _Problem(local, scan, observed, wall, self._steps(poses, step_covariance), self.sigma,
-                           self.robust_c, self.anchor_sigma)
+        anchor_sigma = np.where(unplaced[:, None], self.loose_sigma, self.anchor_sigma)
+        problem = _Problem(start, scan, observed, wall, self._steps(poses, step_covariance, unplaced), self.sigma,
+                           self.robust_c, anchor_sigma, local)
         refined, walls, used = problem.solve(self.iterations)
         # the first pose defines the map frame (DESIGN.md): the solution carried rigidly back onto it
         jump = compose(poses[0], inverse(refined[0] + centre))
@@ -95,13 +106,41 @@ class PlaneAdjustment:
         walls[:, 1] += np.cos(walls[:, 0]) * jump[0] + np.sin(walls[:, 0]) * jump[1]
         return PlaneAdjustmentResult(compose(jump, refined + centre), walls, used, total)
 
-    def _steps(self, poses: np.ndarray, step_covariance: dict[int, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    def _place(self, poses: np.ndarray, scan: np.ndarray, observed: np.ndarray, wall: np.ndarray,
+               unplaced: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Starting poses and walls of the sightings, the unplaced poses placed on the walls that the
+        other scans' sightings make (their means at the pose graph's poses)."""
+        start, wall = poses.copy(), wall.copy()
+        placed_by = (wall >= 0) & ~unplaced[scan]
+        if not unplaced.any() or not placed_by.any():
+            return start, wall
+        n = int(wall.max()) + 1
+        psi, d = world_lines(poses[scan[placed_by]], observed[placed_by])
+        label = wall[placed_by]
+        counts = np.bincount(label, minlength=n)
+        mean_psi = np.angle(np.bincount(label, np.cos(psi), n) + 1j * np.bincount(label, np.sin(psi), n))
+        walls = np.stack([mean_psi, np.bincount(label, d, n) / np.maximum(counts, 1)], axis=1)[counts > 0]
+        number = np.flatnonzero(counts > 0)
+        for k in np.flatnonzero(unplaced):
+            rows = np.flatnonzero(scan == k)
+            found = place(poses[k], observed[rows], walls, self.search_rad, self.search_m, self.gate_rad,
+                          self.gate_m / 3)
+            if found is not None:
+                start[k] = found[0]
+                wall[rows] = np.where(found[1] >= 0, number[found[1]], -1)
+        return start, wall
+
+    def _steps(self, poses: np.ndarray, step_covariance: dict[int, np.ndarray],
+               unplaced: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The pose graph's steps (P − 1, 3) and their whitening matrices (P − 1, 3, 3): Wᵀ W = Σ⁻¹,
-        Σ the front end's step covariance inflated (a step without one: loose)."""
+        Σ the front end's step covariance inflated (a step without one: loose). A step out of an
+        unplaced pose is loose too: the front end matched the next scan against the map, not against
+        the motion model's guess, so the step between them is only as good as that guess."""
         steps = between(poses[:-1], poses[1:])
-        loose = np.diag([1.0, 1.0, np.radians(30.0) ** 2])
+        loose = np.diag(self.loose_sigma**2)
         cov = np.array([step_covariance.get(k, loose) for k in range(1, len(poses))]).reshape(-1, 3, 3)
-        cov = 0.5 * (cov + np.swapaxes(cov, 1, 2)) * self.step_inflation**2
+        cov = 0.5 * (cov + np.swapaxes(cov, 1, 2)) + unplaced[:-1, None, None] * loose
+        cov = cov * self.step_inflation**2
         whiten = np.swapaxes(np.linalg.cholesky(np.linalg.inv(cov)), 1, 2)  # L Lᵀ = Σ⁻¹ → W = Lᵀ
         return steps, whiten
 
@@ -127,13 +166,13 @@ class _Problem:
 
     def __init__(self, poses: np.ndarray, scan: np.ndarray, observed: np.ndarray, wall: np.ndarray,
                  steps: tuple[np.ndarray, np.ndarray], sigma: np.ndarray, robust_c: float,
-                 anchor_sigma: np.ndarray):
+                 anchor_sigma: np.ndarray, anchor: np.ndarray):
         self.start, self.scan, self.observed, self.wall = poses, scan, observed, wall
         self.step, self.whiten = steps
         self.n_poses, self.n_walls = len(poses), int(wall.max()) + 1
         self.prior_sigma, self.robust_c, self.c = sigma, robust_c, robust_c
         self.sigma = np.tile(sigma, (self.n_walls, 1))  # (L, 2) each wall's bearing and range noise
-        self.anchor_sigma = anchor_sigma
+        self.anchor, self.anchor_sigma = anchor, anchor_sigma  # (P, 3) the pose graph's poses, (P, 3) sd
 
     def initial_walls(self) -> np.ndarray:
         """Each wall's (ψ, d) as the circular / plain mean of its sightings from the starting poses."""
@@ -269,10 +308,10 @@ class _Problem:
         # the anchors: each pose held near the pose graph's, loosely (its errors are centimetres)
         every = np.arange(self.n_poses)
         base = 2 * n_s + 3 * len(a) + 3 * every
-        anchor_res = (poses - self.start) / self.anchor_sigma
-        anchor_res[:, 2] = wrap_angle(poses[:, 2] - self.start[:, 2]) / self.anchor_sigma[2]
+        anchor_res = (poses - self.anchor) / self.anchor_sigma
+        anchor_res[:, 2] = wrap_angle(poses[:, 2] - self.anchor[:, 2]) / self.anchor_sigma[:, 2]
         for i in range(3):
-            put(base + i, self._column(every) + i, 1.0 / self.anchor_sigma[i])
+            put(base + i, self._column(every) + i, 1.0 / self.anchor_sigma[:, i])
         n_rows = 2 * n_s + 3 * len(a) + 3 * self.n_poses
         n_cols = 3 * self.n_poses + 2 * self.n_walls
         jac = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
