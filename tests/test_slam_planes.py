@@ -142,7 +142,9 @@ def test_a_scan_the_front_end_left_to_the_motion_model_is_placed_on_the_walls(rn
     unplaced = np.zeros(len(truth), bool)
     unplaced[15] = True
     cfg = PlaneAdjustmentConfig()
-    placed = PlaneAdjustment.from_config(cfg).refine(start, sightings, steps(len(start)), unplaced).poses
+    result = PlaneAdjustment.from_config(cfg).refine(start, sightings, steps(len(start)), unplaced)
+    placed = result.poses
+    assert result.placed == [15]
     kept = PlaneAdjustment.from_config(cfg).refine(start, sightings, steps(len(start))).poses
     aligned, _ = align(placed, truth)
     assert np.linalg.norm(aligned[15, :2] - truth[15, :2]) < 0.03

@@ -134,6 +134,7 @@ def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = 
         "plane_adjustment": None if result.planes is None else {
             "walls": [[round(float(np.degrees(psi)), 4), round(float(d), 4)] for psi, d in result.planes.walls],
             "sightings": result.planes.sightings, "sightings_used": result.planes.sightings_used,
+            "placed_scans": result.planes.placed,
             "ms": round(result.adjustment_seconds * 1e3, 3)},
         "points_per_scan": [len(s) for s in scans],
         "odometry": str(odometry) if odometry is not None else None,

@@ -161,6 +161,9 @@ class RadioSlam:
         adjuster = PlaneAdjustment.from_config(cfg.plane_adjustment) if cfg.plane_adjustment.enabled else None
         unplaced = np.array([s.status in (ScanStatus.PREDICTED, ScanStatus.SKIPPED) for s in steps])
         adjusted = adjuster.refine(poses, sightings, back_end.step_covariance, unplaced) if adjuster else None
+        for k in [] if adjusted is None else adjusted.placed:
+            steps[k] = replace(steps[k], note=f"{steps[k].note}; placed on the walls the other scans sighted "
+                               "by the plane adjustment")
         result = self._result(steps, poses if adjusted is None else adjusted.poses, back_end, seconds,
                               cfg.loop_closure.relocalize_after, cfg.motion.dead_reckoned_scans)
         return replace(result, planes=adjusted, adjustment_seconds=time.perf_counter() - tick)

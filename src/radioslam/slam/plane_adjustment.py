@@ -31,7 +31,7 @@ wherever the walls, not the front end, fix the poses.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -51,6 +51,7 @@ class PlaneAdjustmentResult:
     walls: np.ndarray  # (L, 2) world normal bearing ψ and offset d of each wall landmark
     sightings_used: int  # sightings with a positive weight at the solution
     sightings: int  # sightings of every scan
+    placed: list[int] = field(default_factory=list)  # unplaced scans the walls placed
 
 
 class PlaneAdjustment:
@@ -91,6 +92,7 @@ class PlaneAdjustment:
         unplaced = np.zeros(len(poses), bool) if unplaced is None else np.asarray(unplaced, bool)
         wall = associate(local, scan, observed, self.gate_rad, self.gate_m, self.min_sightings)
         start, wall = self._place(local, scan, observed, wall, unplaced)
+        placed = [int(k) for k in np.flatnonzero(np.any(start != local, axis=1))]
         if wall.max(initial=-1) < 0:
             return PlaneAdjustmentResult(poses.copy(), np.zeros((0, 2)), 0, total)
         keep = wall >= 0
@@ -104,7 +106,7 @@ class PlaneAdjustment:
         walls[:, 1] += np.cos(walls[:, 0]) * centre[0] + np.sin(walls[:, 0]) * centre[1]
         walls[:, 0] = wrap_angle(walls[:, 0] + jump[2])
         walls[:, 1] += np.cos(walls[:, 0]) * jump[0] + np.sin(walls[:, 0]) * jump[1]
-        return PlaneAdjustmentResult(compose(jump, refined + centre), walls, used, total)
+        return PlaneAdjustmentResult(compose(jump, refined + centre), walls, used, total, placed)
 
     def _place(self, poses: np.ndarray, scan: np.ndarray, observed: np.ndarray, wall: np.ndarray,
                unplaced: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
