@@ -85,6 +85,8 @@ class PlaneAdjustment:
         if len(sightings) != len(poses):
             raise SlamError(f"{len(sightings)} sighting lists for {len(poses)} poses", field="(sightings)")
         total = int(sum(len(s) for s in sightings))
+        if not total:
+            return PlaneAdjustmentResult(poses.copy(), np.zeros((0, 2)), 0, 0)
         centre = np.append(poses[:, :2].mean(axis=0), 0.0)  # walls' offsets from the trajectory's centre
         local = poses - centre
         scan = np.repeat(np.arange(len(poses)), [len(s) for s in sightings])
