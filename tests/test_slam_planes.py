@@ -169,3 +169,20 @@ def test_placement_refuses_a_symmetric_room(rng):
     # a start for the solve, on the proposals' lattice (half a bearing gate, a quarter range gate)
     assert np.allclose(found[0][:2], pose[:2], atol=0.05) and abs(np.degrees(found[0][2] - pose[2])) < 1.6
     assert list(found[1]) == [0, 1, 2]
+
+
+def test_a_degenerate_scan_turned_half_round_is_placed_and_let_go_of_its_steps(rng):
+    """A degenerate match that took a hall's 180° twin (its heading from the arcs' axis, its position
+    along the walls from the pace): the walls place it back, and its tight steps no longer hold it."""
+    truth = walk()
+    start = pose_graph_like(truth, rng)
+    start[22] = truth[22] + np.array([0.5, 0.3, np.pi])
+    start[22, 2] = wrap_angle(start[22, 2])
+    degenerate = np.zeros(len(truth), bool)
+    degenerate[22] = True
+    result = PlaneAdjustment.from_config(PlaneAdjustmentConfig()).refine(
+        start, sightings_of(truth, ROOM, rng), steps(len(start)), None, degenerate)
+    aligned, _ = align(result.poses, truth)
+    assert result.placed == [22]
+    assert np.linalg.norm(aligned[22, :2] - truth[22, :2]) < 0.03
+    assert abs(np.degrees(wrap_angle(aligned[22, 2] - truth[22, 2]))) < 0.5

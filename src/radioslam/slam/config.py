@@ -206,6 +206,9 @@ class PlaneAdjustmentConfig(_Section):
     place_search_deg: float = Field(180.0, gt=0)
     loose_sigma_m: float = Field(1.5, gt=0)
     loose_sigma_deg: float = Field(90.0, gt=0)
+    # a degenerate pose (fixed in heading and across its walls, the paced prediction along them) is
+    # placed within this of its heading (a full turn would find a rectangle's 180° twin), 0: never
+    degenerate_search_deg: float = Field(180.0, ge=0)
     iterations: int = Field(30, ge=1)
 
 

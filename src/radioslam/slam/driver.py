@@ -160,7 +160,9 @@ class RadioSlam:
         poses = np.array([back_end.estimates[k] for k in range(len(steps))])
         adjuster = PlaneAdjustment.from_config(cfg.plane_adjustment) if cfg.plane_adjustment.enabled else None
         unplaced = np.array([s.status in (ScanStatus.PREDICTED, ScanStatus.SKIPPED) for s in steps])
-        adjusted = adjuster.refine(poses, sightings, back_end.step_covariance, unplaced) if adjuster else None
+        degenerate = np.array([s.status is ScanStatus.DEGENERATE for s in steps])
+        adjusted = adjuster.refine(poses, sightings, back_end.step_covariance, unplaced, degenerate) \
+            if adjuster else None
         for k in [] if adjusted is None else adjusted.placed:
             steps[k] = replace(steps[k], note=f"{steps[k].note}; placed on the walls the other scans sighted "
                                "by the plane adjustment")

@@ -59,11 +59,11 @@ class PlaneAdjustment:
 
     def __init__(self, sigma: np.ndarray, gate_rad: float, gate_m: float, min_sightings: int, robust_c: float,
                  anchor_sigma: np.ndarray, step_inflation: float, iterations: int,
-                 search_rad: float = np.radians(15.0), search_m: float = 1.5,
-                 loose_sigma: np.ndarray = np.array([0.5, 0.5, np.radians(10.0)])):
+                 search_rad: float = np.pi, search_m: float = 1.5,
+                 loose_sigma: np.ndarray = np.array([1.5, 1.5, np.pi / 2]), degenerate_search_rad: float = 0.0):
         self.sigma, self.gate_rad, self.gate_m, self.min_sightings = sigma, gate_rad, gate_m, min_sightings
         self.robust_c, self.anchor_sigma, self.loose_sigma = robust_c, anchor_sigma, loose_sigma
-        self.search_rad, self.search_m = search_rad, search_m
+        self.search_rad, self.search_m, self.degenerate_search_rad = search_rad, search_m, degenerate_search_rad
         self.step_inflation, self.iterations = step_inflation, iterations
 
     @classmethod
@@ -72,15 +72,18 @@ class PlaneAdjustment:
                    cfg.gate_m, cfg.min_sightings, cfg.robust_c,
                    np.array([cfg.anchor_sigma_m, cfg.anchor_sigma_m, np.radians(cfg.anchor_sigma_deg)]),
                    cfg.step_inflation, cfg.iterations, np.radians(cfg.place_search_deg), cfg.place_search_m,
-                   np.array([cfg.loose_sigma_m, cfg.loose_sigma_m, np.radians(cfg.loose_sigma_deg)]))
+                   np.array([cfg.loose_sigma_m, cfg.loose_sigma_m, np.radians(cfg.loose_sigma_deg)]),
+                   np.radians(cfg.degenerate_search_deg))
 
     def refine(self, poses: np.ndarray, sightings: list[np.ndarray], step_covariance: dict[int, np.ndarray],
-               unplaced: np.ndarray | None = None) -> PlaneAdjustmentResult:
+               unplaced: np.ndarray | None = None, degenerate: np.ndarray | None = None) -> PlaneAdjustmentResult:
         """Poses (P, 3) refined with the scans' sightings (A_k, 2: bearing, range) of walls;
         ``step_covariance[k]`` is the covariance of the step into pose k in pose k − 1's frame;
         ``unplaced`` (P,) marks the poses the front end left to the motion model (predicted,
         skipped): each is first placed on the walls the others sighted
-        (:func:`radioslam.slam.wall_placement.place`) and held to the pose graph only loosely."""
+        (:func:`radioslam.slam.wall_placement.place`) and held to the pose graph only loosely;
+        ``degenerate`` (P,) marks the poses the front end fixed in heading and across the walls only:
+        each is placed within ±``degenerate_search`` of its heading and, once placed, held as loosely."""
         poses = np.asarray(poses, dtype=np.float64)
         if len(sightings) != len(poses):
             raise SlamError(f"{len(sightings)} sighting lists for {len(poses)} poses", field="(sightings)")
@@ -92,9 +95,13 @@ class PlaneAdjustment:
         scan = np.repeat(np.arange(len(poses)), [len(s) for s in sightings])
         observed = np.concatenate([np.zeros((0, 2))] + [np.asarray(s, dtype=np.float64) for s in sightings])
         unplaced = np.zeros(len(poses), bool) if unplaced is None else np.asarray(unplaced, bool)
+        degenerate = np.zeros(len(poses), bool) if degenerate is None else np.asarray(degenerate, bool) & ~unplaced
         wall = associate(local, scan, observed, self.gate_rad, self.gate_m, self.min_sightings)
-        start, wall = self._place(local, scan, observed, wall, unplaced)
-        placed = [int(k) for k in np.flatnonzero(np.any(start != local, axis=1))]
+        search = np.where(unplaced, self.search_rad, np.where(degenerate, self.degenerate_search_rad, 0.0))
+        start, wall = self._place(local, scan, observed, wall, search)
+        moved = np.any(start != local, axis=1)
+        placed = [int(k) for k in np.flatnonzero(moved)]
+        unplaced = unplaced | (degenerate & moved)
         if wall.max(initial=-1) < 0:
             return PlaneAdjustmentResult(poses.copy(), np.zeros((0, 2)), 0, total)
         keep = wall >= 0
@@ -111,9 +118,11 @@ class PlaneAdjustment:
         return PlaneAdjustmentResult(compose(jump, refined + centre), walls, used, total, placed)
 
     def _place(self, poses: np.ndarray, scan: np.ndarray, observed: np.ndarray, wall: np.ndarray,
-               unplaced: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Starting poses and walls of the sightings, the unplaced poses placed on the walls that the
-        other scans' sightings make (their means at the pose graph's poses)."""
+               search: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Starting poses and walls of the sightings, the poses with a heading ``search`` (P,) > 0
+        placed within it on the walls that the other scans' sightings make (their means at the pose
+        graph's poses)."""
+        unplaced = search > 0
         start, wall = poses.copy(), wall.copy()
         placed_by = (wall >= 0) & ~unplaced[scan]
         if not unplaced.any() or not placed_by.any():
@@ -127,8 +136,7 @@ class PlaneAdjustment:
         number = np.flatnonzero(counts > 0)
         for k in np.flatnonzero(unplaced):
             rows = np.flatnonzero(scan == k)
-            found = place(poses[k], observed[rows], walls, self.search_rad, self.search_m, self.gate_rad,
-                          self.gate_m / 3)
+            found = place(poses[k], observed[rows], walls, search[k], self.search_m, self.gate_rad, self.gate_m / 3)
             if found is not None:
                 start[k] = found[0]
                 wall[rows] = np.where(found[1] >= 0, number[found[1]], -1)
@@ -137,13 +145,13 @@ class PlaneAdjustment:
     def _steps(self, poses: np.ndarray, step_covariance: dict[int, np.ndarray],
                unplaced: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The pose graph's steps (P − 1, 3) and their whitening matrices (P − 1, 3, 3): Wᵀ W = Σ⁻¹,
-        Σ the front end's step covariance inflated (a step without one: loose). A step out of an
-        unplaced pose is loose too: the front end matched the next scan against the map, not against
-        the motion model's guess, so the step between them is only as good as that guess."""
+        Σ the front end's step covariance inflated (a step without one: loose). The steps into and out
+        of an unplaced pose are loose too: the front end matched the next scan against the map, not
+        against the motion model's guess, and a degenerate scan's step is only as good as its match."""
         steps = between(poses[:-1], poses[1:])
         loose = np.diag(self.loose_sigma**2)
         cov = np.array([step_covariance.get(k, loose) for k in range(1, len(poses))]).reshape(-1, 3, 3)
-        cov = 0.5 * (cov + np.swapaxes(cov, 1, 2)) + unplaced[:-1, None, None] * loose
+        cov = 0.5 * (cov + np.swapaxes(cov, 1, 2)) + (unplaced[:-1] | unplaced[1:])[:, None, None] * loose
         cov = cov * self.step_inflation**2
         whiten = np.swapaxes(np.linalg.cholesky(np.linalg.inv(cov)), 1, 2)  # L Lᵀ = Σ⁻¹ → W = Lᵀ
         return steps, whiten
