@@ -194,20 +194,21 @@ class PlaneAdjustmentConfig(_Section):
     # Tukey's biweight of a sighting's normalized residual: 0 beyond this many σ
     robust_c: float = Field(4.685, gt=0)
     # each pose is held near the pose graph's with this sd (its errors), and the pose graph's steps at
-    # the front end's step covariance times step_inflation² (the
-    # scans' information is in both: not counted twice at full weight)
+    # the front end's step covariance times step_inflation² (the scans' information is in both: not
+    # counted twice at full weight)
     anchor_sigma_m: float = Field(0.05, gt=0)
     anchor_sigma_deg: float = Field(0.5, gt=0)
     step_inflation: float = Field(3.0, gt=0)
     # a pose the front end left to the motion model (predicted, skipped) is first placed on
     # the walls within this search (its step may be a jump the motion model did not see), then held
-    # to the pose graph's this loosely (the motion model's own uncertainty)
+    # to the pose graph's this loosely, and so are the steps into and out of it
     place_search_m: float = Field(1.5, gt=0)
     place_search_deg: float = Field(180.0, gt=0)
     loose_sigma_m: float = Field(1.5, gt=0)
     loose_sigma_deg: float = Field(90.0, gt=0)
-    # a degenerate pose (fixed in heading and across its walls, the paced prediction along them) is
-    # placed within this of its heading (a full turn would find a rectangle's 180° twin), 0: never
+    # a degenerate pose (its position along its walls the pace's; its heading from their axis, so
+    # possibly a hall's 180° twin: 1.1 m and 180° off after a kidnap) is placed within this of its
+    # heading, and once placed held as loosely; 0: never
     degenerate_search_deg: float = Field(180.0, ge=0)
     iterations: int = Field(30, ge=1)
 
