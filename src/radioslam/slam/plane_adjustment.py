@@ -41,7 +41,7 @@ from scipy.sparse.linalg import spsolve
 from radioslam.slam.config import PlaneAdjustmentConfig
 from radioslam.slam.errors import SlamError
 from radioslam.slam.se2 import between, compose, inverse, wrap_angle
-from radioslam.slam.wall_association import associate, world_lines
+from radioslam.slam.wall_association import associate, wall_means
 from radioslam.slam.wall_placement import place
 
 
@@ -58,9 +58,8 @@ class PlaneAdjustment:
     """Built from plain settings by :meth:`from_config`; :meth:`refine` after the pose graph."""
 
     def __init__(self, sigma: np.ndarray, gate_rad: float, gate_m: float, min_sightings: int, robust_c: float,
-                 anchor_sigma: np.ndarray, step_inflation: float, iterations: int,
-                 search_rad: float = np.pi, search_m: float = 1.5,
-                 loose_sigma: np.ndarray = np.array([1.5, 1.5, np.pi / 2]), degenerate_search_rad: float = 0.0):
+                 anchor_sigma: np.ndarray, step_inflation: float, iterations: int, search_rad: float, search_m: float,
+                 loose_sigma: np.ndarray, degenerate_search_rad: float):
         self.sigma, self.gate_rad, self.gate_m, self.min_sightings = sigma, gate_rad, gate_m, min_sightings
         self.robust_c, self.anchor_sigma, self.loose_sigma = robust_c, anchor_sigma, loose_sigma
         self.search_rad, self.search_m, self.degenerate_search_rad = search_rad, search_m, degenerate_search_rad
@@ -127,13 +126,8 @@ class PlaneAdjustment:
         placed_by = (wall >= 0) & ~unplaced[scan]
         if not unplaced.any() or not placed_by.any():
             return start, wall
-        n = int(wall.max()) + 1
-        psi, d = world_lines(poses[scan[placed_by]], observed[placed_by])
-        label = wall[placed_by]
-        counts = np.bincount(label, minlength=n)
-        mean_psi = np.angle(np.bincount(label, np.cos(psi), n) + 1j * np.bincount(label, np.sin(psi), n))
-        walls = np.stack([mean_psi, np.bincount(label, d, n) / np.maximum(counts, 1)], axis=1)[counts > 0]
-        number = np.flatnonzero(counts > 0)
+        walls, counts = wall_means(poses, scan[placed_by], observed[placed_by], wall[placed_by], int(wall.max()) + 1)
+        walls, number = walls[counts > 0], np.flatnonzero(counts > 0)
         for k in np.flatnonzero(unplaced):
             rows = np.flatnonzero(scan == k)
             found = place(poses[k], observed[rows], walls, search[k], self.search_m, self.gate_rad, self.gate_m / 3)
@@ -186,15 +180,6 @@ class _Problem:
         self.sigma = np.tile(sigma, (self.n_walls, 1))  # (L, 2) each wall's bearing and range noise
         self.anchor, self.anchor_sigma = anchor, anchor_sigma  # (P, 3) the pose graph's poses, (P, 3) sd
 
-    def initial_walls(self) -> np.ndarray:
-        """Each wall's (ψ, d) as the circular / plain mean of its sightings from the starting poses."""
-        psi = wrap_angle(self.start[self.scan, 2] + self.observed[:, 0])
-        d = self.observed[:, 1] + np.cos(psi) * self.start[self.scan, 0] + np.sin(psi) * self.start[self.scan, 1]
-        counts = np.bincount(self.wall, minlength=self.n_walls)
-        mean_psi = np.angle(np.bincount(self.wall, np.cos(psi), self.n_walls)
-                            + 1j * np.bincount(self.wall, np.sin(psi), self.n_walls))
-        return np.stack([mean_psi, np.bincount(self.wall, d, self.n_walls) / counts], axis=1)
-
     def solve(self, iterations: int,
               widths: tuple[float, ...] = (8.0, 4.0, 2.0, 1.0)) -> tuple[np.ndarray, np.ndarray, int]:
         """Graduated non-convexity (Blake & Zisserman 1987; Yang et al., "Graduated non-convexity for
@@ -202,7 +187,8 @@ class _Problem:
         every sighting near its wall counts and the walls pull a stretch of poses the pose graph put a
         few centimetres off back onto them, and narrows to ``robust_c``; ``iterations`` of
         Levenberg–Marquardt at most per width."""
-        poses, walls = self.start.copy(), self.initial_walls()
+        poses = self.start.copy()
+        walls, _ = wall_means(poses, self.scan, self.observed, self.wall, self.n_walls)  # from the starting poses
         self.c = np.inf
         self._wall_noise(poses, walls)  # at the pose graph's poses: its errors count as the walls' noise
         for width in widths:
@@ -268,11 +254,6 @@ class _Problem:
         rho = np.where(norm < c, c**2 / 6 * (1 - (1 - (norm / c) ** 2) ** 3), c**2 / 6)
         return float(rho.sum() + 0.5 * np.sum(residual[n:] ** 2))
 
-    @staticmethod
-    def _column(pose_index: np.ndarray) -> np.ndarray:
-        """First parameter column of each pose."""
-        return 3 * pose_index
-
     def _linearize(self, poses: np.ndarray, walls: np.ndarray):
         """Stacked whitened residuals, their sparse Jacobian and the IRLS weights (1 for the steps)."""
         k, L = self.scan, self.wall
@@ -284,12 +265,11 @@ class _Problem:
         e_d = (self.observed[:, 1] + c * x + s * y - d) / sig_d
         n_s = len(k)
         wall_col = 3 * self.n_poses + 2 * L
-        pose_col = self._column(k)
+        pose_col = 3 * k  # each pose's first parameter column
         rows, cols, vals = [], [], []
 
         def put(row, col, val):
-            ok = col >= 0
-            rows.append(row[ok]), cols.append(col[ok]), vals.append(np.broadcast_to(val, row.shape)[ok])
+            rows.append(row), cols.append(col), vals.append(np.broadcast_to(val, row.shape))
 
         r_psi, r_d = 2 * np.arange(n_s), 2 * np.arange(n_s) + 1
         put(r_psi, pose_col + 2, 1 / sig_psi)
@@ -315,15 +295,15 @@ class _Problem:
         idx = np.arange(len(a))
         for i in range(3):
             for j in range(3):
-                put(base + i, self._column(idx) + j, w_a[:, i, j])
-                put(base + i, self._column(idx + 1) + j, w_b[:, i, j])
+                put(base + i, 3 * idx + j, w_a[:, i, j])
+                put(base + i, 3 * (idx + 1) + j, w_b[:, i, j])
         # the anchors: each pose held near the pose graph's, loosely (its errors are centimetres)
         every = np.arange(self.n_poses)
         base = 2 * n_s + 3 * len(a) + 3 * every
         anchor_res = (poses - self.anchor) / self.anchor_sigma
         anchor_res[:, 2] = wrap_angle(poses[:, 2] - self.anchor[:, 2]) / self.anchor_sigma[:, 2]
         for i in range(3):
-            put(base + i, self._column(every) + i, 1.0 / self.anchor_sigma[:, i])
+            put(base + i, 3 * every + i, 1.0 / self.anchor_sigma[:, i])
         n_rows = 2 * n_s + 3 * len(a) + 3 * self.n_poses
         n_cols = 3 * self.n_poses + 2 * self.n_walls
         jac = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),

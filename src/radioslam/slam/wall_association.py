@@ -26,6 +26,16 @@ def world_lines(poses: np.ndarray, observed: np.ndarray) -> tuple[np.ndarray, np
     return psi, observed[:, 1] + np.cos(psi) * poses[:, 0] + np.sin(psi) * poses[:, 1]
 
 
+def wall_means(poses: np.ndarray, scan: np.ndarray, observed: np.ndarray, wall: np.ndarray,
+               walls: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each of ``walls`` walls' (ψ, d) (L, 2) as the circular and plain means of the sightings labelled
+    ``wall`` (S,), seen from ``poses[scan]``, and how many sightings each has (L,; 0: (0, 0))."""
+    psi, d = world_lines(poses[scan], observed)
+    counts = np.bincount(wall, minlength=walls)
+    mean_psi = np.angle(np.bincount(wall, np.cos(psi), walls) + 1j * np.bincount(wall, np.sin(psi), walls))
+    return np.stack([mean_psi, np.bincount(wall, d, walls) / np.maximum(counts, 1)], axis=1), counts
+
+
 def associate(poses: np.ndarray, scan: np.ndarray, observed: np.ndarray, gate_rad: float, gate_m: float,
               min_sightings: int) -> np.ndarray:
     """The wall (S,) of each sighting (scan index (S,), observed (S, 2)) seen from ``poses`` (P, 3),
