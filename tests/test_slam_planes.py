@@ -186,3 +186,22 @@ def test_a_degenerate_scan_turned_half_round_is_placed_and_let_go_of_its_steps(r
     assert result.placed == [22]
     assert np.linalg.norm(aligned[22, :2] - truth[22, :2]) < 0.03
     assert abs(np.degrees(wrap_angle(aligned[22, 2] - truth[22, 2]))) < 0.5
+
+
+def test_walls_left_without_sightings_by_placement_are_dropped(rng):
+    """Three scans taken standing still, which the motion model put 1 m and 60° off, sight the room's
+    walls as walls of their own; once placed, those walls have no sightings left and must not appear
+    in the result (a shelf face seen later keeps a higher wall number alive)."""
+    truth = walk()
+    truth[11:13] = truth[10]
+    start = pose_graph_like(truth, rng)
+    start[10:13] = truth[10:13] + np.array([0.8, -0.6, np.radians(60.0)])
+    unplaced = np.zeros(len(truth), bool)
+    unplaced[10:13] = True
+    sightings = sightings_of(truth, ROOM, rng)
+    shelf = np.array([[np.pi / 4, 5.0]])
+    for k in range(20, 30):
+        sightings[k] = np.concatenate([sightings[k], sightings_of(truth[k:k + 1], shelf, rng)[0]])
+    result = PlaneAdjustment.from_config(PlaneAdjustmentConfig()).refine(start, sightings, steps(len(start)), unplaced)
+    assert result.placed == [10, 11, 12]
+    assert len(result.walls) == 5 and np.isfinite(result.walls).all()

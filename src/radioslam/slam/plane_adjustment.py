@@ -104,7 +104,8 @@ class PlaneAdjustment:
         if wall.max(initial=-1) < 0:
             return PlaneAdjustmentResult(poses.copy(), np.zeros((0, 2)), 0, total)
         keep = wall >= 0
-        scan, observed, wall = scan[keep], observed[keep], wall[keep]
+        scan, observed = scan[keep], observed[keep]
+        _, wall = np.unique(wall[keep], return_inverse=True)  # dense again: placement can empty a wall
         anchor_sigma = np.where(unplaced[:, None], self.loose_sigma, self.anchor_sigma)
         problem = _Problem(start, scan, observed, wall, self._steps(poses, step_covariance, unplaced), self.sigma,
                            self.robust_c, anchor_sigma, local)
