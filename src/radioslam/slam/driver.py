@@ -99,7 +99,7 @@ class RadioSlam:
             raise SlamError(f"{len(odometry)} odometry poses for {len(scans)} scans", field="(odometry)")
         front_end, loop_closer, back_end = FrontEnd.from_config(cfg, odometry), LoopCloser.from_config(cfg), \
             BackEnd.from_config(cfg)
-        lost_and_found, forks = LostAndFound(cfg.loop_closure), Forks.from_config(cfg)
+        lost_and_found, forks = LostAndFound.from_config(cfg), Forks.from_config(cfg)
         steps: list[Step] = []
         sightings: list[np.ndarray] = []  # each scan's sightings of walls, for the last solve
         seconds, lost = [], 0  # lost: consecutive scans nothing matched

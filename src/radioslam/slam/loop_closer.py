@@ -185,10 +185,17 @@ class LoopCloser:
         in_place = fit_score(grid, xy, normals, np.zeros(3))
         return fit_score(grid, xy, normals, jump) >= self.cfg.self_similar * in_place
 
-    def follow(self, grid: LikelihoodGrid, points: ScanPoints,
-               guess: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
-        """The scan refined against ``grid`` near ``guess``: its pose, score and covariance there."""
-        local, pose = self._local_fit(grid, points, guess)
+    def follow(self, grid: LikelihoodGrid, map_normals: np.ndarray, points: ScanPoints, guesses: np.ndarray,
+               radius_m: float) -> tuple[np.ndarray, float, np.ndarray]:
+        """The scan's best pose against ``grid`` within ``radius_m`` of the first of ``guesses`` (G, 3), at
+        every heading its normals or the guesses suggest (one step of any motion, as the front end searches
+        its local map): its pose, score and covariance there (score 0 where nothing matches)."""
+        headings = HeadingSearch.from_config(self.front_cfg).headings(points.normals, map_normals, guesses[:, 2])
+        found = BranchAndBound(grid, self.grid_cfg.branch_levels).search(points.xy, points.normals, guesses[0, :2],
+                                                                        headings, radius_m, 0.0)
+        if found.pose is None:
+            return guesses[0], 0.0, self.floor
+        local, pose = self._local_fit(grid, points, found.pose)
         return pose, fit_score(grid, points.xy, points.normals, pose), local.covariance
 
     def relocalize(self, k: int, points: ScanPoints, estimates: dict[int, np.ndarray],
