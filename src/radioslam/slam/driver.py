@@ -155,6 +155,13 @@ class RadioSlam:
             steps.append(step)
             seconds.append(time.perf_counter() - tick)
         back_end.finish()
+        # trials left undecided: another place explained their scans almost as well
+        for keys in lost_and_found.undecided:
+            for key in keys:
+                if steps[key].status is not ScanStatus.RELOCALIZED:
+                    steps[key] = replace(steps[key], status=ScanStatus.AMBIGUOUS, note="; ".join(filter(None, [
+                        steps[key].note, f"another place of the map explains scans {keys[0]}–{keys[-1]} almost as "
+                        "well (a trial left undecided)"])))
         # 9. every pose adjusted together with the walls its specular arcs face (a smooth last solve)
         tick = time.perf_counter()
         poses = np.array([back_end.estimates[k] for k in range(len(steps))])

@@ -98,6 +98,9 @@ class LostAndFound:
         self.trial: Trial | None = None
         self.alert = 0  # scans left after a confirmed jump during which each is also searched for where it was taken
         self.taken_from: int | None = None  # the last scan before that jump
+        # the scans of each trial that ended undecided: followed for at least confirm_scans scans, with at least
+        # one scan's worth of evidence for the other place (log(1 + gain)), but never enough
+        self.undecided: list[list[int]] = []
 
     @property
     def bound(self) -> float:
@@ -194,7 +197,10 @@ class LostAndFound:
         trial.evidence += evidence(*scores(grid, place, front_grid, pose, points), self.bound)
         if found_score < self.cfg.relocalize_min_score or trial.evidence < 0.0 or \
                 len(trial.found) >= 3 * self.cfg.confirm_scans:
-            self.trial = None  # the front end explains the scans as well: it was exploring
+            # the front end explains the scans as well (it was exploring), or the trial was left undecided
+            if len(trial.found) >= self.cfg.confirm_scans and trial.evidence >= self.bound / self.cfg.confirm_scans:
+                self.undecided.append([loop.key for loop in trial.found])
+            self.trial = None
             return
         trial.found.append(loop_closer.placed(k, place, found_score, covariance, trial.keys, estimates))
         trial.tracked = pose
