@@ -39,7 +39,7 @@ def kidnap_cases(scenes: list[str], cases: int, seed: int) -> list[Kidnap]:
 
 def evaluate(case: Kidnap, poses: np.ndarray) -> dict:
     truth, taken = case.scene.poses, case.kidnapped
-    aligned_rest, transform = align(poses[~taken], truth[~taken])
+    aligned_rest, _ = align(poses[~taken], truth[~taken])
     error = np.linalg.norm(aligned_rest[:, :2] - truth[~taken, :2], axis=1)
     after = np.arange(len(truth))[~taken] >= case.start + case.length
     # the kidnapped scans against the walk before them (aligned on it alone: a miss after them must not move it)

@@ -153,6 +153,7 @@ class LoopClosureConfig(_Section):
     suspect_drop: float = Field(0.7, gt=0, le=1)
     suspect_window: int = Field(10, ge=2)
     confirm_scans: int = Field(3, ge=1)
+    max_trial_scans: int = Field(9, ge=1)  # a trial followed this long without a decision ends undecided
     # after a confirmed trial each of the next alert_scans scans is also searched for where the terminal was taken
     alert_scans: int = Field(10, ge=0)
     # unless the map near the front end's pose, carried to the place found, scores this fraction of

@@ -149,19 +149,17 @@ class RadioSlam:
                 loops = [lc for lc in loops if lc.anchor >= decided.fork] + [decided.loop]
                 lost_and_found.forget()
                 for key, _ in decided.switches:
-                    steps[key] = replace(steps[key], note=f"{steps[key].note}; its rival taken at scan {k}: it "
-                                         "closes a loop with the map from before")
+                    steps[key] = steps[key].noted(f"its rival taken at scan {k}: it closes a loop with the map "
+                                                  "from before")
             back_end.add_loops(loops + relocalizations)
             steps.append(step)
             seconds.append(time.perf_counter() - tick)
         back_end.finish()
         # trials left undecided: another place explained their scans almost as well
         for keys in lost_and_found.undecided:
-            for key in keys:
-                if steps[key].status is not ScanStatus.RELOCALIZED:
-                    steps[key] = replace(steps[key], status=ScanStatus.AMBIGUOUS, note="; ".join(filter(None, [
-                        steps[key].note, f"another place of the map explains scans {keys[0]}–{keys[-1]} almost as "
-                        "well (a trial left undecided)"])))
+            for key in (key for key in keys if steps[key].status is not ScanStatus.RELOCALIZED):
+                steps[key] = steps[key].noted(f"another place of the map explains scans {keys[0]}–{keys[-1]} "
+                                              "almost as well (a trial left undecided)", ScanStatus.AMBIGUOUS)
         # 9. every pose adjusted together with the walls its specular arcs face (a smooth last solve)
         tick = time.perf_counter()
         poses = np.array([back_end.estimates[k] for k in range(len(steps))])
@@ -171,8 +169,7 @@ class RadioSlam:
         adjusted = adjuster.refine(poses, sightings, back_end.step_covariance, unplaced, degenerate) \
             if adjuster else None
         for k in [] if adjusted is None else adjusted.placed:
-            steps[k] = replace(steps[k], note=f"{steps[k].note}; placed on the walls the other scans sighted "
-                               "by the plane adjustment")
+            steps[k] = steps[k].noted("placed on the walls the other scans sighted by the plane adjustment")
         result = self._result(steps, poses if adjusted is None else adjusted.poses, back_end, seconds,
                               cfg.loop_closure.relocalize_after, cfg.motion.dead_reckoned_scans)
         return replace(result, planes=adjusted, adjustment_seconds=time.perf_counter() - tick)

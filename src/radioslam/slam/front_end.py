@@ -18,7 +18,7 @@ relocalize.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -46,6 +46,10 @@ class Step:
     rivals: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # other hypotheses within the margin
     note: str = ""  # why the status is not MATCHED, for the warnings
     contradicted: float = 0.0  # fraction of the points on space the map saw through (a wrong place)
+
+    def noted(self, text: str, status: ScanStatus | None = None) -> "Step":
+        """This step with ``text`` added to its note (and its status replaced, when given)."""
+        return replace(self, note="; ".join(filter(None, [self.note, text])), status=status or self.status)
 
 
 def fuse(pose: np.ndarray, covariance: np.ndarray, weight: float, prior: np.ndarray,

@@ -20,7 +20,7 @@ instead of a decision:
    relocalized. One scan brings at most that much (one the front end's place contradicts
    outright), so it decides only if the scans after it, followed at its place, do not speak
    against it. Evidence below zero (the front end explains them better together), a place
-   scoring below ``relocalize_min_score`` or ``3 × confirm_scans`` scans undecided end it.
+   scoring below ``relocalize_min_score`` or ``max_trial_scans`` scans undecided end it.
 
 A terminal found elsewhere may be brought back where it was taken (or a stretch of foreign scans
 ends and the walk's own resume): for ``alert_scans`` scans after a confirmed trial, each scan is
@@ -74,8 +74,8 @@ class Trial:
         return np.array(guesses)
 
 
-def scores(grid: LikelihoodGrid, place: np.ndarray, other_grid: LikelihoodGrid, other: np.ndarray,
-           points: ScanPoints) -> tuple[float, float]:
+def hypothesis_scores(grid: LikelihoodGrid, place: np.ndarray, other_grid: LikelihoodGrid, other: np.ndarray,
+                      points: ScanPoints) -> tuple[float, float]:
     """The scan's scores at ``place`` in ``grid`` (the trial's) and at ``other`` in ``other_grid``
     (the front end's): the same map but for the trial's own scans, each at its hypothesis' poses."""
     return fit_score(grid, points.xy, points.normals, place), fit_score(other_grid, points.xy, points.normals, other)
@@ -131,9 +131,7 @@ class LostAndFound:
             self.trial = None
         elif self.trial is not None:
             self._follow(k, pose, score, points, estimates, loop_closer)
-        elif self.alert > 0 and self._open_where_taken(k, pose, score, points, estimates, loop_closer):
-            pass
-        elif self.suspect(score):
+        elif self.alert > 0 or self.suspect(score):
             self._open(k, pose, score, points, estimates, loop_closer)
         if followed:
             self.alert = max(0, self.alert - 1)
@@ -150,42 +148,47 @@ class LostAndFound:
         return self.trial is not None and len(self.trial.found) >= self.cfg.confirm_scans and \
             self.trial.evidence >= self.bound
 
-    def _open_where_taken(self, k, pose, score, points, estimates, loop_closer: LoopCloser) -> bool:
-        """After a jump, the scan searched for within a step of the last pose before it (a terminal
-        carried away is often brought back, foreign scans are followed by the walk's own): a place
-        there explaining it ``gain`` better than the front end opens a trial, with no self-similarity
-        test (one place is tested, not the whole map's best)."""
-        keys = loop_closer.map_keys(k, before=k)
-        if self.taken_from is None or self.taken_from not in estimates or not keys:
-            return False
-        grid, normals = loop_closer.whole_map(keys, estimates)
-        place, found_score, covariance = loop_closer.follow(grid, normals, points, estimates[self.taken_from][None],
-                                                            self.max_step_m)
-        if found_score < self.cfg.relocalize_min_score:
-            return False
-        return self._start(keys, pose, loop_closer.placed(k, place, found_score, covariance, keys, estimates),
-                           scores(grid, place, grid, pose, points))
-
-    def _start(self, keys: list[int], pose: np.ndarray, found: LoopClosure, scores: tuple[float, float]) -> bool:
-        """A trial opened by ``found`` if the map explains the scan ``relocalize_gain`` better at its
-        place than at the front end's (on the points it knows at both)."""
-        if scores[0] < (1.0 + self.cfg.relocalize_gain) * scores[1]:
-            return False
-        self.trial = Trial(keys, pose, [found], evidence(*scores, self.bound))
-        return True
-
     def _open(self, k, pose, score, points, estimates, loop_closer: LoopCloser) -> None:
+        """A trial for scan k: first where the terminal was taken (after a jump), then, if its score
+        dropped, wherever in the whole map before it it fits best."""
         keys = loop_closer.map_keys(k, before=k)
         if not keys:
             return
         grid, normals = loop_closer.whole_map(keys, estimates)
+        if self.alert > 0 and self._open_where_taken(k, pose, points, estimates, loop_closer, keys, grid, normals):
+            return
+        if not self.suspect(score):
+            return
         found = loop_closer.relocalize(k, points, estimates, before=k, whole=(grid, normals))
         if found is None or found.score < (1.0 + self.cfg.relocalize_gain) * score:
             return
         place = loop_closer.placed_pose(found, estimates)
         if loop_closer.looks_alike(compose(place, inverse(pose)), pose, keys, grid, estimates):
             return
-        self._start(keys, pose, found, scores(grid, place, grid, pose, points))
+        self._start(keys, pose, found, hypothesis_scores(grid, place, grid, pose, points))
+
+    def _open_where_taken(self, k, pose, points, estimates, loop_closer: LoopCloser, keys: list[int],
+                          grid: LikelihoodGrid, normals: np.ndarray) -> bool:
+        """After a jump, the scan searched for within a step of the last pose before it (a terminal
+        carried away is often brought back, foreign scans are followed by the walk's own): a place
+        there explaining it ``gain`` better than the front end opens a trial, with no self-similarity
+        test (one place is tested, not the whole map's best)."""
+        if self.taken_from is None or self.taken_from not in estimates:
+            return False
+        place, found_score, covariance = loop_closer.follow(grid, normals, points, estimates[self.taken_from][None],
+                                                            self.max_step_m)
+        if found_score < self.cfg.relocalize_min_score:
+            return False
+        return self._start(keys, pose, loop_closer.placed(k, place, found_score, covariance, keys, estimates),
+                           hypothesis_scores(grid, place, grid, pose, points))
+
+    def _start(self, keys: list[int], pose: np.ndarray, found: LoopClosure, pair: tuple[float, float]) -> bool:
+        """A trial opened by ``found`` if the map explains the scan ``relocalize_gain`` better at its
+        place than at the front end's pose (``pair``: the two scores)."""
+        if pair[0] < (1.0 + self.cfg.relocalize_gain) * pair[1]:
+            return False
+        self.trial = Trial(keys, pose, [found], evidence(*pair, self.bound))
+        return True
 
     def _follow(self, k, pose, score, points, estimates, loop_closer: LoopCloser) -> None:
         trial = self.trial
@@ -194,9 +197,9 @@ class LostAndFound:
         place, found_score, covariance = loop_closer.follow(grid, normals, points, trial.guesses(pose, estimates),
                                                             self.max_step_m)
         front_grid, _ = loop_closer.whole_map(keys, estimates)  # and at the front end's
-        trial.evidence += evidence(*scores(grid, place, front_grid, pose, points), self.bound)
+        trial.evidence += evidence(*hypothesis_scores(grid, place, front_grid, pose, points), self.bound)
         if found_score < self.cfg.relocalize_min_score or trial.evidence < 0.0 or \
-                len(trial.found) >= 3 * self.cfg.confirm_scans:
+                len(trial.found) >= self.cfg.max_trial_scans:
             # the front end explains the scans as well (it was exploring), or the trial was left undecided
             if len(trial.found) >= self.cfg.confirm_scans and trial.evidence >= self.bound / self.cfg.confirm_scans:
                 self.undecided.append([loop.key for loop in trial.found])
