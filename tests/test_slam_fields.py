@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from radioslam.slam.free_space import free_samples
-from radioslam.slam.grid import LikelihoodGrid, phasor_agreement, phasors
+from radioslam.slam.grid import LikelihoodGrid, field_reach, phasor_agreement, phasors
 from radioslam.slam.refine import fit_scores, refine_poses
 from radioslam.slam.se2 import inverse, transform_points
 
@@ -102,3 +102,34 @@ def test_the_motion_decides_what_the_scan_cannot_tell_apart_and_no_more():
     assert choose(shifted, np.array([0.36, 0.40]), np.array([0.0, 0.15]), margin, turn, trusted) == 0
     # outside the margin of the best discounted score: the best discounted score wins, turned or not
     assert choose(candidates, np.array([0.30, 0.90]), np.array([0.0, 0.30]), margin, turn, trusted) == 1
+
+
+def test_a_grid_as_wide_as_its_field_reaches_scores_every_placement_as_a_wider_one(rng):
+    """``field_reach`` (6σ, or a wall's plane field along it) is as far as a field is nonzero: a grid
+    with that margin gives every lookup, point-to-point and point-to-plane, with its normal
+    agreement, the value a grid 2 m wider gives (lookups beyond clip to its zeroed border), and a
+    free sample beyond the map's points still marks its cell. (Points in general position: the
+    extreme point sits on a cell border, where rounding may move it by a cell.)"""
+    t = rng.random((120, 1))
+    walls = np.concatenate([np.hstack([4 * t[:60] - 2, np.full((60, 1), -1.5)]),
+                            np.hstack([np.full((60, 1), 2.0), 3 * t[60:] - 1.5])]) + rng.normal(0, 0.01, (120, 2))
+    normals = np.concatenate([np.full(60, np.pi / 2), np.full(60, np.pi)])
+    free = np.array([[-4.01, 0.02], [0.03, 3.01]])  # beyond the points, 3 m from any
+    res, sigma, reach = 0.05, 0.05, 0.5
+    tight, wide = (LikelihoodGrid.from_points(walls, res, sigma, field_reach(sigma, res, reach) + extra, normals,
+                                              np.radians(1.0), reach, free, 1.0) for extra in (0.0, 2.0))
+    seen = rng.integers(0, 120, 2500)
+    query = np.vstack([walls[seen] + rng.normal(0, 0.1, (2500, 2)),  # on and around the walls,
+                       rng.uniform(-6, 6, (2498, 2)), free])  # anywhere (far beyond both grids too)
+    on_plane = rng.random(5000) < 0.5
+    point_phasor = phasors(np.concatenate([normals[seen] + rng.normal(0, np.radians(1.0), 2500),
+                                           rng.uniform(-np.pi, np.pi, 2500)]))
+
+    def lookup(grid):
+        c = np.floor((query - grid.origin) / grid.resolution).astype(int)
+        return grid.likelihood_at(c[:, 0], c[:, 1], on_plane, point_phasor)
+
+    shift = (tight.origin - wide.origin) / res
+    assert np.allclose(shift, np.round(shift), atol=1e-9)  # one lattice
+    assert np.array_equal(lookup(tight), lookup(wide))
+    assert np.count_nonzero(lookup(tight) > 0.1) > 500 and np.all(lookup(tight)[-2:] == -1.0)  # it tests the field

@@ -54,14 +54,21 @@ class BranchAndBound:
         self.grid, self.levels = grid, levels
         self.pyramid = grid.pyramid(levels)
 
-    def _scores(self, cells, normals, phasor, nodes, level):
+    def _scores(self, cells, plane_offset, phasor, nodes, level):
         """Mean bound (N,) of nodes (angle index, ox, oy) at ``level``; exact with normals at 0.
-        ``phasor`` holds the world-normal phasors (A, P) of the points at each heading (None: left out,
-        a bound of the score with them)."""
-        a, ox, oy = nodes[:, 0], nodes[:, 1], nodes[:, 2]
-        x, y = cells[a, :, 0] + ox[:, None], cells[a, :, 1] + oy[:, None]  # (N, P)
+        ``cells`` (2, A, P) holds the points' cells at each heading, ``phasor`` their world-normal
+        phasors (A, P) (None: left out, a bound of the score with them)."""
+        nx, ny = self.grid.values.shape
+        a = nodes[:, 0]
+        cell = cells[0, a]  # (N, P) flat indices, built in place (int32: the hottest loop of the search)
+        cell += nodes[:, 1:2]
+        np.clip(cell, 0, nx - 1, out=cell)
+        cell *= ny
+        y = cells[1, a]
+        y += nodes[:, 2:3]
+        cell += np.clip(y, 0, ny - 1, out=y)
         world_normal = phasor[a] if level == 0 and phasor is not None else None
-        return self.grid.likelihood_at(x, y, ~np.isnan(normals), world_normal, self.pyramid[level]).mean(axis=1)
+        return self.grid.likelihood_of_cells(cell, plane_offset, world_normal, self.pyramid[level]).mean(axis=1)
 
     def _children(self, nodes, level, reach):
         half = 2 ** (level - 1)
@@ -85,7 +92,8 @@ class BranchAndBound:
         on discounted scores can pick, and no more)."""
         res = self.grid.resolution
         reach = int(np.ceil(window_m / res))
-        cells = heading_cells(self.grid, points, centre, headings)
+        cells = np.ascontiguousarray(np.moveaxis(heading_cells(self.grid, points, centre, headings), 2, 0))
+        plane_offset = np.where(np.isnan(normals), 0, self.grid.values.size).astype(np.int32)
         phasor = phasors(headings[:, None] + normals[None, :])  # (A, P) world normals, once per heading
         top = 2**self.levels
         starts = np.arange(-reach, reach + 1, top)
@@ -101,11 +109,11 @@ class BranchAndBound:
         for level in range(self.levels, -1, -1):
             if level == 0:  # the leaves' scores without the normal agreement bound theirs with it: only
                 # the leaves that bound keeps are scored with it (a sixth of them, at a fifth of the cost each)
-                nodes = nodes[self._scores(cells, normals, None, nodes, 0) >= threshold]
-            bound = self._scores(cells, normals, phasor, nodes, level)
+                nodes = nodes[self._scores(cells, plane_offset, None, nodes, 0) >= threshold]
+            bound = self._scores(cells, plane_offset, phasor, nodes, level)
             evaluated += len(nodes)
             if level > 0:
-                leaf, greedy = self._greedy(cells, normals, phasor, nodes[np.argmax(bound)], level, reach)
+                leaf, greedy = self._greedy(cells, plane_offset, phasor, nodes[np.argmax(bound)], level, reach)
                 if discount is not None and leaf is not None:
                     greedy *= 1.0 - float(discount(poses_of(leaf[None]))[0])
                 threshold = max(threshold, keep_ratio * greedy)
@@ -122,15 +130,15 @@ class BranchAndBound:
         return BranchBoundResult(poses[order[0]], float(bound[order[0]]), evaluated, exhaustive, poses[order],
                                  bound[order])
 
-    def _greedy(self, cells, normals, phasor, node, level, reach) -> tuple[np.ndarray | None, float]:
+    def _greedy(self, cells, plane_offset, phasor, node, level, reach) -> tuple[np.ndarray | None, float]:
         """The leaf reached by always taking the best child, and its score: a reachable lower bound."""
         nodes = node[None]
         for h in range(level, 0, -1):
             nodes = self._children(nodes, h, reach)
             if len(nodes) == 0:
                 return None, 0.0
-            nodes = nodes[[np.argmax(self._scores(cells, normals, phasor, nodes, h - 1))]]
-        return nodes[0], float(self._scores(cells, normals, phasor, nodes, 0)[0])
+            nodes = nodes[[np.argmax(self._scores(cells, plane_offset, phasor, nodes, h - 1))]]
+        return nodes[0], float(self._scores(cells, plane_offset, phasor, nodes, 0)[0])
 
 
 def distinct(poses: np.ndarray, scores: np.ndarray, radius_m: float, radius_rad: float,

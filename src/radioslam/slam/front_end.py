@@ -26,7 +26,7 @@ from radioslam.slam.branch_bound import BranchAndBound, distinct
 from radioslam.slam.config import FrontEndConfig, GridConfig, MotionConfig, ScanConfig
 from radioslam.slam.correlative import candidate_likelihoods, correlative_match
 from radioslam.slam.degeneracy import DegeneracyTest, remap
-from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.grid import LikelihoodGrid, field_reach
 from radioslam.slam.motion import Hypothesis, MotionHypothesis, MotionModel, jump_covariance
 from radioslam.slam.refine import fit_scores, refine_poses
 from radioslam.slam.rotation_search import HeadingSearch
@@ -198,8 +198,8 @@ class FrontEnd:
         keys = self.local_map_keys(estimates)
         xy, normals = fused_points(keys, estimates, self.points, np.zeros(3))
         g = self.grid_cfg
-        margin = self.motion_cfg.max_step_m + self.cfg.window_m + 3 * g.sigma_m
         free = fused_free(keys, estimates, self.points)
+        margin = field_reach(g.sigma_m, g.resolution_m, g.plane_reach_m)
         grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, normals,
                                           np.radians(g.normal_sigma_deg), g.plane_reach_m, free, g.free_penalty)
         return grid, normals

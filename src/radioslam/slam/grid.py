@@ -75,16 +75,20 @@ class LikelihoodGrid:
                     normals: np.ndarray | None = None, normal_sigma: float = np.inf,
                     plane_reach: float = 0.0, free: np.ndarray | None = None,
                     free_penalty: float = 0.0) -> "LikelihoodGrid":
-        """The field of map points (P, 2) with their world normals (P,), ``margin`` beyond them;
+        """The field of map points (P, 2) with their world normals (P,), ``margin`` beyond them (and
+        beyond the free samples; :func:`field_reach` is as far as the field reaches);
         cells holding a ``free`` sample (F, 2) (:mod:`radioslam.slam.free_space`) and farther than
         3σ from every map point score −``free_penalty``: a point there contradicts the map.
         Whole-grid array operations throughout (float32 fields: the scores need no more)."""
         if len(points) == 0:
             raise SlamError("cannot build a likelihood grid from no points", field="points")
-        origin = points.min(axis=0) - margin
-        shape = tuple(np.ceil((points.max(axis=0) + margin - origin) / resolution).astype(int) + 1)
-        cells = np.floor((points - origin) / resolution).astype(np.int64)
-        owner = np.full(shape, -1, dtype=np.int64)  # the map point of each hit cell (the last one wins)
+        extent = [points] if free is None or not len(free) else [points, free]
+        low = np.min([[p[:, axis].min() for axis in (0, 1)] for p in extent], axis=0)  # per column: an axis-0
+        high = np.max([[p[:, axis].max() for axis in (0, 1)] for p in extent], axis=0)  # reduction of (N, 2) is slow
+        origin = low - margin
+        shape = tuple(np.ceil((high + margin - origin) / resolution).astype(int) + 1)
+        cells = np.floor((points - origin) / resolution).astype(np.intp)
+        owner = np.full(shape, -1, dtype=np.intp)  # the map point of each hit cell (the last one wins)
         owner[cells[:, 0], cells[:, 1]] = np.arange(len(points))
         # the nearest hit cell of every cell, and the offset (in cells) from it
         ix, iy = distance_transform_edt(owner < 0, return_distances=False, return_indices=True)
@@ -138,10 +142,16 @@ class LikelihoodGrid:
         points whose world normals have phasors ``point_phasor`` (:func:`phasors`; left out when
         None). ``fields`` (2, NX, NY) replaces the point and plane fields (a max-pooled level, for
         branch and bound)."""
-        fields = self.fields if fields is None else fields
-        nx, ny = fields.shape[1:]
+        nx, ny = self.values.shape
         cell = np.clip(x, 0, nx - 1) * ny + np.clip(y, 0, ny - 1)  # flat indices: one gather, not three
-        like = np.take(fields, np.asarray(on_plane, dtype=np.intp) * (nx * ny) + cell)
+        return self.likelihood_of_cells(cell, np.asarray(on_plane, dtype=np.intp) * (nx * ny), point_phasor, fields)
+
+    def likelihood_of_cells(self, cell: np.ndarray, plane_offset: np.ndarray, point_phasor: np.ndarray | None = None,
+                            fields: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`likelihood_at` of flat cell indices (ix·NY + iy, within the grid); ``plane_offset`` is
+        NX·NY where a point is scored point-to-plane, else 0 (broadcast against ``cell``)."""
+        fields = self.fields if fields is None else fields
+        like = np.take(fields, plane_offset + cell)
         if point_phasor is not None:  # free space (negative) contradicts whatever the normal
             agree = phasor_agreement(np.take(self.normal_phasors, cell), np.take(self.normal_known, cell),
                                      point_phasor, self.normal_sigma)
@@ -185,6 +195,13 @@ class LikelihoodGrid:
         return levels_out
 
 
+def field_reach(sigma: float, resolution: float, plane_reach: float = 0.0) -> float:
+    """How far beyond its points a field is nonzero (6σ, :func:`_gaussian`; a wall's plane field as far
+    as ``plane_reach`` along it), plus its zeroed border cell: a grid with this margin scores every
+    pose exactly as a wider one (lookups beyond clip to the border; points in general position)."""
+    return max(6.0 * sigma, plane_reach) + 2.0 * resolution
+
+
 def _gaussian(distance2: np.ndarray, sigma: float) -> np.ndarray:
     """exp(−d²/2σ²) in float32 of squared distances, exactly 0 beyond 6σ (below 1.6e-8)."""
     g = np.exp(np.float32(-0.5 / sigma**2) * distance2)
@@ -195,8 +212,10 @@ def _gaussian(distance2: np.ndarray, sigma: float) -> np.ndarray:
 def _pool_twice(fields: np.ndarray, shift: int) -> np.ndarray:
     """max(F[i, j], F[i + s, j], F[i, j + s], F[i + s, j + s]) over the last two axes, 0 beyond:
     the max over [i, i + 2s) from two windows [i, i + s) and [i + s, i + 2s) of the level below."""
-    out = fields.copy()
-    np.maximum(out[:, :-shift, :], fields[:, shift:, :], out=out[:, :-shift, :])
-    wider = out.copy()
-    np.maximum(wider[:, :, :-shift], out[:, :, shift:], out=wider[:, :, :-shift])
+    out = np.empty_like(fields)
+    np.maximum(fields[:, :-shift, :], fields[:, shift:, :], out=out[:, :-shift, :])
+    out[:, -shift:, :] = fields[:, -shift:, :]
+    wider = np.empty_like(fields)
+    np.maximum(out[:, :, :-shift], out[:, :, shift:], out=wider[:, :, :-shift])
+    wider[:, :, -shift:] = out[:, :, -shift:]
     return wider
