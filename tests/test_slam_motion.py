@@ -249,3 +249,26 @@ def test_lost_stretches_are_predicted_runs_or_long_unfixed_runs(statuses, lost):
     result = SlamResult(np.zeros((n, 3)), np.zeros((n, 3)), [codes[c] for c in statuses], np.zeros(n))
     assert result.lost_scans == lost
     assert result.tracking_lost == bool(lost)
+
+
+def test_the_scans_of_a_trial_left_undecided_are_marked_ambiguous(monkeypatch):
+    """Another place explained scans 2–4 almost as well (a trial followed them and ended undecided):
+    the run marks them ambiguous and says why, and leaves the others as they were."""
+    from radioslam.slam.lost_found import LostAndFound
+
+    observe = LostAndFound.observe
+
+    def observed(self, k, *args):
+        found = observe(self, k, *args)
+        if k == 4:
+            self.undecided.append([2, 3, 4])
+        return found
+
+    scans = sensed(generate_case(RoomKind.RECTANGLE, MotionKind.SMOOTH, 1, snr_db=15, max_poses=7).scene, 1)
+    plain = RadioSlam().run(scans)
+    monkeypatch.setattr(LostAndFound, "observe", observed)
+    marked = RadioSlam().run(scans)
+    assert all(marked.status[k] is ScanStatus.AMBIGUOUS for k in (2, 3, 4))
+    assert [s for k, s in enumerate(marked.status) if k not in (2, 3, 4)] == \
+        [s for k, s in enumerate(plain.status) if k not in (2, 3, 4)]
+    assert sum("trial left undecided" in w for w in marked.warnings) == 3
