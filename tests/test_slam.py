@@ -97,6 +97,31 @@ def test_branch_and_bound_finds_the_exhaustive_optimum_with_fewer_lookups(rng):
     assert np.abs(found.pose[:2] - truth[:2]).max() <= 0.05 + 1e-9
 
 
+def test_seeds_only_speed_branch_and_bound_up(rng):
+    """Seeds (a motion model's predictions) prune from the top level with a score actually reached:
+    every leaf within keep_ratio of the best discounted score is still returned, with its score,
+    whether the seeds are right, wrong or outside the search; a right seed scores fewer nodes."""
+    pts, nrm = room_points(rng)
+    grid = LikelihoodGrid.from_points(pts, 0.05, 0.05, 2.0, nrm, np.radians(1.0), 0.5)
+    truth = np.array([0.9, 0.6, np.radians(-7.0)])
+    scan = transform_points(inverse(truth), pts[::9]) + rng.normal(0, 0.01, (len(pts[::9]), 2))
+    scan_normals = nrm[::9] - truth[2]
+    headings = np.radians(np.concatenate([np.arange(-12.0, -1.0), np.arange(83.0, 94.0)]))  # two rotation candidates
+
+    def discount(poses):  # a motion prior: turns and distance from the origin cost
+        return 0.25 * np.abs(poses[:, 2]) / np.pi + 0.05 * np.linalg.norm(poses[:, :2], axis=1)
+
+    matcher = BranchAndBound(grid, 4)
+    plain = matcher.search(scan, scan_normals, np.zeros(2), headings, 1.3, 0.0, 0.77, discount)
+    for seeds in (truth[None], np.array([[0.0, 0.0, np.radians(90.0)], [-3.0, 5.0, 2.0]]), truth[None] + [0.6, 0, 0]):
+        seeded = matcher.search(scan, scan_normals, np.zeros(2), headings, 1.3, 0.0, 0.77, discount, seeds)
+        assert np.array_equal(seeded.candidates, plain.candidates) and np.array_equal(seeded.scores, plain.scores)
+        assert np.array_equal(seeded.pose, plain.pose)
+    assert len(plain.candidates) > 1 and np.abs(plain.pose[:2] - truth[:2]).max() <= 0.05 + 1e-9
+    right = matcher.search(scan, scan_normals, np.zeros(2), headings, 1.3, 0.0, 0.77, discount, truth[None])
+    assert right.evaluated < plain.evaluated
+
+
 def arc_scan(normal_deg: float, rng) -> Scan:
     """A wall seen as an arc: beams of orientation 0 at one range, power peaking on the normal."""
     beams = np.arange(-6, 7)

@@ -80,16 +80,20 @@ class BranchAndBound:
               window_rad: float, angle_step: float, min_score: float) -> BranchBoundResult:
         """The best pose within ±window of ``prediction`` (x, y, θ)."""
         headings = prediction[2] + window_angles(window_rad, angle_step)
-        return self.search(points, normals, prediction[:2], headings, window_m, min_score)
+        return self.search(points, normals, prediction[:2], headings, window_m, min_score, seeds=prediction[None])
 
     def search(self, points: np.ndarray, normals: np.ndarray, centre: np.ndarray, headings: np.ndarray,
                window_m: float, min_score: float, keep_ratio: float = 1.0,
-               discount: Callable[[np.ndarray], np.ndarray] | None = None) -> BranchBoundResult:
+               discount: Callable[[np.ndarray], np.ndarray] | None = None,
+               seeds: np.ndarray | None = None) -> BranchBoundResult:
         """Poses (x, y) within ±window_m of ``centre`` at each of ``headings`` (A,): the best, and
         every leaf scoring at least ``keep_ratio`` times the best. With a prior ``discount`` (a
         fraction of the score per pose (C, 3)), the best is the best discounted score, and every
         leaf whose own score reaches ``keep_ratio`` times it is kept (the candidates a decision
-        on discounted scores can pick, and no more)."""
+        on discounted scores can pick, and no more). ``seeds`` (S, 3), poses likely near the best
+        (a motion model's predictions), only speed it up: the leaves nearest them are scored first,
+        and the best of those, a score actually reached, prunes from the top level on (the same
+        result: the threshold never exceeds ``keep_ratio`` times the best)."""
         res = self.grid.resolution
         reach = int(np.ceil(window_m / res))
         cells = np.ascontiguousarray(np.moveaxis(heading_cells(self.grid, points, centre, headings), 2, 0))
@@ -106,6 +110,12 @@ class BranchAndBound:
                              wrap_angle(headings[leaves[:, 0]])], axis=1)
 
         threshold, evaluated = min_score, 0
+        leaves = self._near(np.atleast_2d(seeds), centre, headings, reach) if seeds is not None else np.zeros((0, 3))
+        if len(leaves):
+            reached = self._scores(cells, plane_offset, phasor, leaves, 0)
+            if discount is not None:
+                reached = reached * (1.0 - discount(poses_of(leaves)))
+            threshold, evaluated = max(threshold, keep_ratio * float(reached.max())), len(leaves)
         for level in range(self.levels, -1, -1):
             if level == 0:  # the leaves' scores without the normal agreement bound theirs with it: only
                 # the leaves that bound keeps are scored with it (a sixth of them, at a fifth of the cost each)
@@ -129,6 +139,16 @@ class BranchAndBound:
         order = order[bound[order] >= keep_ratio * judged[order[0]]]
         return BranchBoundResult(poses[order[0]], float(bound[order[0]]), evaluated, exhaustive, poses[order],
                                  bound[order])
+
+    def _near(self, seeds: np.ndarray, centre: np.ndarray, headings: np.ndarray, reach: int) -> np.ndarray:
+        """The leaves (angle index, ox, oy) nearest the seed poses (S, 3) and their neighbours within a
+        cell and a heading index, inside the search."""
+        a = np.argmin(np.abs(wrap_angle(headings[None, :] - seeds[:, 2:3])), axis=1)
+        offset = np.round((seeds[:, :2] - centre[:2]) / self.grid.resolution)
+        step = np.stack(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1], indexing="ij"), axis=-1).reshape(-1, 3)
+        leaves = (np.column_stack([a, offset]).astype(np.int32)[:, None, :] + step[None]).reshape(-1, 3)
+        inside = (leaves[:, 0] >= 0) & (leaves[:, 0] < len(headings)) & np.all(np.abs(leaves[:, 1:]) <= reach, axis=1)
+        return np.unique(leaves[inside], axis=0)
 
     def _greedy(self, cells, plane_offset, phasor, node, level, reach) -> tuple[np.ndarray | None, float]:
         """The leaf reached by always taking the best child, and its score: a reachable lower bound."""

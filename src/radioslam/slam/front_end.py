@@ -123,7 +123,8 @@ class FrontEnd:
         headings = self.heading_search.headings(phi, map_normals, [h.pose[2] for h in hypotheses])
         found = BranchAndBound(grid, self.grid_cfg.branch_levels).search(
             xy, phi, last[:2], headings, self.motion_cfg.max_step_m, 0.0,
-            1.0 - cfg.ambiguity_margin - cfg.lattice_allowance, lambda poses: self._prior_discount(poses, hypotheses))
+            1.0 - cfg.ambiguity_margin - cfg.lattice_allowance, lambda poses: self._prior_discount(poses, hypotheses),
+            np.array([h.pose for h in hypotheses]))
         if found.pose is None:
             return Step(primary, self.predicted, ScanStatus.PREDICTED, 0.0, note="nothing in the local map matches")
         candidates, _ = distinct(found.candidates, found.scores, cfg.distinct_m, np.radians(cfg.distinct_deg),

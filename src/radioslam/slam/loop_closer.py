@@ -192,7 +192,7 @@ class LoopCloser:
         its local map): its pose, score and covariance there (score 0 where nothing matches)."""
         headings = HeadingSearch.from_config(self.front_cfg).headings(points.normals, map_normals, guesses[:, 2])
         found = BranchAndBound(grid, self.grid_cfg.branch_levels).search(points.xy, points.normals, guesses[0, :2],
-                                                                        headings, radius_m, 0.0)
+                                                                        headings, radius_m, 0.0, seeds=guesses)
         if found.pose is None:
             return guesses[0], 0.0, self.floor
         local, pose = self._local_fit(grid, points, found.pose)
