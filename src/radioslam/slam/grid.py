@@ -93,26 +93,29 @@ class LikelihoodGrid:
         # the nearest hit cell of every cell, and the offset (in cells) from it
         ix, iy = distance_transform_edt(owner < 0, return_distances=False, return_indices=True)
         nearest = np.take(owner, ix * shape[1] + iy)
-        dx = np.subtract(np.arange(shape[0], dtype=np.float32)[:, None], ix, dtype=np.float32)
-        dy = np.subtract(np.arange(shape[1], dtype=np.float32)[None, :], iy, dtype=np.float32)
+        dx = np.subtract(np.arange(shape[0], dtype=np.float32)[:, None], ix, dtype=np.float32).ravel()
+        dy = np.subtract(np.arange(shape[1], dtype=np.float32)[None, :], iy, dtype=np.float32).ravel()
         d2 = (dx * dx + dy * dy) * np.float32(resolution**2)  # squared distance to the nearest hit cell centre
         # per map point first (few), then gathered: the nearest map point's normal in every cell
         normal_p = np.full(len(points), np.nan) if normals is None else np.asarray(normals, dtype=np.float64)
         known_p = ~np.isnan(normal_p)
         phasor = np.where(known_p, np.exp(1j * np.where(known_p, normal_p, 0.0)), 0.0).astype(np.complex64)[nearest]
+        # both fields vanish beyond 6σ and the plane reach: computed only on the cells within (a fraction)
+        near = np.flatnonzero(d2 < max(6 * sigma, plane_reach) ** 2 + resolution**2)
+        d2_near, phasor_near = d2[near], phasor.ravel()[near]
         # point-to-plane: the offset along the nearest map point's normal (0 phasor: unknown), within reach
-        along = phasor.real * dx + phasor.imag * dy
+        along = phasor_near.real * dx[near] + phasor_near.imag * dy[near]
         along2 = along * along * np.float32(resolution**2)
-        plane2 = np.where((phasor != 0) & (d2 <= plane_reach**2), along2, d2)
-        fields = np.stack([_gaussian(d2, sigma), _gaussian(plane2, sigma)])  # point, then plane field
+        plane2 = np.where((phasor_near != 0) & (d2_near <= plane_reach**2), along2, d2_near)
+        fields = np.zeros((2, d2.size), dtype=np.float32)  # point, then plane field
+        fields[0, near], fields[1, near] = _gaussian(d2_near, sigma), _gaussian(plane2, sigma)
         if free is not None and len(free) and free_penalty > 0:
             u = (free - origin) / resolution
             inside = (u[:, 0] >= 0) & (u[:, 0] < shape[0]) & (u[:, 1] >= 0) & (u[:, 1] < shape[1])
-            c = u[inside].astype(np.int64)  # non-negative: truncation is the floor
-            contradicted = np.zeros(shape[0] * shape[1], dtype=bool)
-            contradicted[c[:, 0] * shape[1] + c[:, 1]] = True
-            contradicted = contradicted.reshape(shape) & (d2 > (3 * sigma) ** 2)
-            fields[:, contradicted] = -free_penalty
+            c = u[inside].astype(np.intp)  # non-negative: truncation is the floor
+            flat = c[:, 0] * shape[1] + c[:, 1]
+            fields[:, flat[d2[flat] > (3 * sigma) ** 2]] = -free_penalty  # free, and far from every map point
+        fields = fields.reshape(2, *shape)
         fields[:, [0, -1], :] = 0.0  # lookups beyond the grid clip to its border: keep it empty
         fields[:, :, [0, -1]] = 0.0
         grid = cls(fields[0], origin, resolution, normal_p[nearest], normal_sigma, fields[1], phasor)
@@ -166,25 +169,30 @@ class LikelihoodGrid:
     def interpolate(self, points: np.ndarray, on_plane: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Bilinear likelihood (P,) between cell centres and its gradient (P, 2) in world
         units, point-to-plane where ``on_plane`` (P,)."""
-        u = (points - self.origin) / self.resolution - 0.5
-        i0 = np.floor(u).astype(np.int64)
-        f = u - i0
-        hi = np.array(self.values.shape) - 1
-        x0, y0 = np.clip(i0[:, 0], 0, hi[0]), np.clip(i0[:, 1], 0, hi[1])
-        x1, y1 = np.clip(i0[:, 0] + 1, 0, hi[0]), np.clip(i0[:, 1] + 1, 0, hi[1])
-
-        plane = np.asarray(on_plane, dtype=np.intp) * self.values.size
-        flat, ny = self.fields.ravel(), self.values.shape[1]
-
-        def corner(x, y):  # flat indices: one gather, not three
-            return np.take(flat, plane + x * ny + y)
-
-        v00, v10, v01, v11 = corner(x0, y0), corner(x1, y0), corner(x0, y1), corner(x1, y1)
-        fx, fy = f[:, 0], f[:, 1]
-        value = (v00 * (1 - fx) + v10 * fx) * (1 - fy) + (v01 * (1 - fx) + v11 * fx) * fy
-        dx = ((v10 - v00) * (1 - fy) + (v11 - v01) * fy) / self.resolution
-        dy = ((v01 - v00) * (1 - fx) + (v11 - v10) * fx) / self.resolution
+        value, dx, dy, _ = self.sample(points[:, 0], points[:, 1], on_plane)
         return value, np.stack([dx, dy], axis=1)
+
+    def sample(self, x: np.ndarray, y: np.ndarray, on_plane: np.ndarray):
+        """At world points (x, y) (any shape, alike): the bilinear likelihood between cell centres, its
+        gradient ∂/∂x and ∂/∂y in world units (point-to-plane where ``on_plane``, broadcast against x),
+        and the world normal of the nearest map point (:meth:`normal_at`): one pass for the refinement."""
+        ox, oy = self.origin
+        res, (nx, ny) = self.resolution, self.values.shape
+        u, v = (x - ox) / res - 0.5, (y - oy) / res - 0.5
+        i0, j0 = np.floor(u).astype(np.intp), np.floor(v).astype(np.intp)
+        fx, fy = u - i0, v - j0
+        x0, y0 = np.clip(i0, 0, nx - 1) * ny, np.clip(j0, 0, ny - 1)  # flat indices: one gather, not three
+        x1, y1 = np.clip(i0 + 1, 0, nx - 1) * ny, np.clip(j0 + 1, 0, ny - 1)
+        base = np.asarray(on_plane, dtype=np.intp) * self.values.size
+        flat = self.fields.ravel()
+        v00, v10 = np.take(flat, base + x0 + y0), np.take(flat, base + x1 + y0)
+        v01, v11 = np.take(flat, base + x0 + y1), np.take(flat, base + x1 + y1)
+        value = (v00 * (1 - fx) + v10 * fx) * (1 - fy) + (v01 * (1 - fx) + v11 * fx) * fy
+        gx = ((v10 - v00) * (1 - fy) + (v11 - v01) * fy) / res
+        gy = ((v01 - v00) * (1 - fx) + (v11 - v10) * fx) / res
+        cx = np.clip(np.floor((x - ox) / res).astype(np.intp), 0, nx - 1)  # the cell holding the point
+        cy = np.clip(np.floor((y - oy) / res).astype(np.intp), 0, ny - 1)
+        return value, gx, gy, np.take(self.normals, cx * ny + cy)
 
     def pyramid(self, levels: int) -> list[np.ndarray]:
         """Max-pooled fields (2, NX, NY) as in ``fields``: level h holds the max over cells

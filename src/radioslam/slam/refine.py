@@ -25,21 +25,17 @@ def fit_terms(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, pos
     """Residuals (C, P) and their Jacobians (C, P, 3) at each of ``poses`` (C, 3)."""
     known = ~np.isnan(normals)
     sigma = grid.normal_sigma
-    c, s = np.cos(poses[:, 2])[:, None, None], np.sin(poses[:, 2])[:, None, None]
-    px, py = points[None, :, 0:1], points[None, :, 1:2]
-    placed = np.concatenate([c * px - s * py, s * px + c * py], axis=2) + poses[:, None, :2]  # (C, P, 2)
-    d_theta = np.concatenate([-s * px - c * py, c * px - s * py], axis=2)  # ∂(R p)/∂θ
-    flat = placed.reshape(-1, 2)
-    value, grad = grid.interpolate(flat, np.tile(known, len(poses)))
-    value, grad = value.reshape(len(poses), -1), grad.reshape(len(poses), -1, 2)
-    map_normal = grid.normal_at(flat).reshape(len(poses), -1)
+    c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
+    px, py = points[:, 0], points[:, 1]
+    rx, ry = c * px - s * py, s * px + c * py  # (C, P) the points turned; ∂(R p)/∂θ = (−ry, rx)
+    value, gx, gy, map_normal = grid.sample(rx + poses[:, 0:1], ry + poses[:, 1:2], known)
     delta = np.where(known, wrap_angle(poses[:, 2:3] + np.nan_to_num(normals) - map_normal), 0.0)
     delta = np.nan_to_num(delta)  # no map normal there
     positive = value > 0  # free space: no normal
     agree = np.where(positive, np.exp(-0.5 * (delta / sigma) ** 2), 1.0)
-    dv_theta = np.einsum("cpi,cpi->cp", grad, d_theta)
+    dv_theta = gx * -ry + gy * rx
     d_agree = np.where(positive, -agree * delta / sigma**2, 0.0)
-    jac = -np.stack([grad[..., 0] * agree, grad[..., 1] * agree, dv_theta * agree + value * d_agree], axis=2)
+    jac = -np.stack([gx * agree, gy * agree, dv_theta * agree + value * d_agree], axis=2)
     return 1.0 - value * agree, jac
 
 
