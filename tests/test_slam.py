@@ -28,11 +28,16 @@ def test_se2_compose_between_inverse(a, b):
 
 
 def test_pyramid_level_is_the_max_over_its_window(rng):
-    grid = LikelihoodGrid(rng.random((37, 29)), np.zeros(2), 0.1, np.full((37, 29), np.nan), np.inf)
-    for h, (level, plane) in enumerate(grid.pyramid(4)):  # the point field, then the plane field
+    """Level 0 holds both fields; each coarser level h the max of both over [i, i + 2^h) × [j, j + 2^h)."""
+    point, plane = rng.random((37, 29)) - 0.2, rng.random((37, 29)) - 0.2  # some free (negative) cells
+    grid = LikelihoodGrid(point, np.zeros(2), 0.1, np.full((37, 29), np.nan), np.inf, plane)
+    levels = grid.pyramid(4)
+    assert len(levels) == 5 and np.array_equal(levels[0], np.stack([point, plane]))
+    either = np.maximum(point, plane)
+    for h, level in enumerate(levels[1:], start=1):
         w = 2**h
-        brute = np.array([[grid.values[i:i + w, j:j + w].max() for j in range(29)] for i in range(37)])
-        assert np.array_equal(level, brute) and np.array_equal(plane, brute)  # no plane field: the same
+        brute = np.array([[either[i:i + w, j:j + w].max() for j in range(29)] for i in range(37)])
+        assert level.shape == (1, 37, 29) and np.array_equal(level[0], brute)
 
 
 def test_plane_field_ignores_the_offset_along_a_wall_within_reach():

@@ -68,7 +68,8 @@ class BranchAndBound:
         y += nodes[:, 2:3]
         cell += np.clip(y, 0, ny - 1, out=y)
         world_normal = phasor[a] if level == 0 and phasor is not None else None
-        return self.grid.likelihood_of_cells(cell, plane_offset, world_normal, self.pyramid[level]).mean(axis=1)
+        offset = plane_offset if level == 0 else 0  # the coarse levels hold one field, the max of both
+        return self.grid.likelihood_of_cells(cell, offset, world_normal, self.pyramid[level]).mean(axis=1)
 
     def _children(self, nodes, level, reach):
         half = 2 ** (level - 1)

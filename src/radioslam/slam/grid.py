@@ -195,12 +195,13 @@ class LikelihoodGrid:
         return value, gx, gy, np.take(self.normals, cx * ny + cy)
 
     def pyramid(self, levels: int) -> list[np.ndarray]:
-        """Max-pooled fields (2, NX, NY) as in ``fields``: level h holds the max over cells
-        [i, i + 2^h) × [j, j + 2^h)."""
-        levels_out = [self.fields]
+        """Level 0: ``fields`` (2, NX, NY); level h ≥ 1: (1, NX, NY), the max over cells [i, i + 2^h) ×
+        [j, j + 2^h) of both fields (the plane field is ≥ the point field anyway, up to rounding): one
+        bound for every point, point-to-plane or not, at half the pooling."""
+        levels_out = [self.fields, np.maximum(self.fields[:1], self.fields[1:])]
         for h in range(1, levels + 1):
             levels_out.append(_pool_twice(levels_out[-1], 2 ** (h - 1)))
-        return levels_out
+        return levels_out[:1] + levels_out[2:]
 
 
 def field_reach(sigma: float, resolution: float, plane_reach: float = 0.0) -> float:
