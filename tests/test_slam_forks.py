@@ -53,6 +53,7 @@ def fork_at_scan_3(closer: StubCloser, chosen_loops: list[LoopClosure] | None = 
     before the fork or not. Returns the decision and the estimates."""
     forks = Forks.from_config(SlamConfig())
     forks._contradicted = lambda fork, k, estimates, loop_closer: contradicted
+    forks._contradicted_more = lambda fork, k, estimates, loop_closer, jump: contradicted
     estimates = {k: p for k, p in enumerate(walk(6))}  # the chosen branch: straight on
     rival = compose(estimates[2], [0.0, 0.0, np.pi])
     for k in range(6):
@@ -106,6 +107,22 @@ def test_a_branch_is_contradicted_by_walls_where_the_map_before_the_fork_saw_thr
     closer = SimpleNamespace(points={1: SimpleNamespace(xy=across, normals=np.full(20, np.nan))})
     assert forks._contradicted(fork, 1, {1: np.zeros(3)}, closer)
     assert not forks._contradicted(fork, 1, {1: np.array([3.0, 0.0, 0.0])}, closer)  # on the wall at x = 5
+
+
+def test_the_chosen_branch_must_be_contradicted_significantly_more_than_the_rivals():
+    """A sign test on the points each branch puts on the frozen map's free space: 15 against 0 is
+    evidence (a wrong wall, hall-random-13), 6 against 2 (a ghost a scan, shelf-hall seed 2) and
+    3 against 3 are not; the evidence grows with the counts, not with one point's place."""
+    forks = Forks.from_config(SlamConfig())
+    jump = np.array([1.0, 0.0, np.pi])
+
+    def decided(chosen, rival):
+        forks._on_free = lambda fork, k, estimates, loop_closer, j=None: (chosen if j is None else rival, 400)
+        return forks._contradicted_more(None, 0, {}, None, jump)
+
+    assert decided(15, 0) and decided(7, 0) and decided(12, 2)
+    assert not decided(6, 2) and not decided(3, 3) and not decided(0, 0) and not decided(6, 0)
+    assert [decided(c, 2) for c in range(20)] == sorted(decided(c, 2) for c in range(20))  # monotone in the count
 
 
 def test_switching_carries_every_pose_since_the_fork_and_the_graph_keeps_the_rivals_step():
