@@ -5,7 +5,8 @@ A node (a, h, ox, oy) stands for the 2^h × 2^h translations [ox, ox + 2^h) × [
 at heading a; the mean over the points of the level-h max-pooled grid bounds the
 score of every translation in it. Level by level, nodes whose bound is below the
 threshold are pruned and the rest split into four; a greedy descent from the best node
-first raises the threshold to a score that is actually reached. At level 0 the bound
+first raises the threshold to a score that is actually reached (and, before the top level, the
+best of the leaves nearest the seeds given: a motion model's predictions). At level 0 the bound
 is the score, so the result is the exhaustive search's best (an exact search, not a
 heuristic), at a fraction of the lookups. The leaf score includes the normal agreement;
 the coarser bounds leave it out (it is ≤ 1), so they stay admissible.
