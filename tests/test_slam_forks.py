@@ -52,8 +52,9 @@ def fork_at_scan_3(closer: StubCloser, chosen_loops: list[LoopClosure] | None = 
     observed with ``chosen_loops`` as its own loops, the chosen branch ``contradicted`` by the map
     before the fork or not. Returns the decision and the estimates."""
     forks = Forks.from_config(SlamConfig())
-    forks._contradicted = lambda fork, k, estimates, loop_closer: contradicted
-    forks._contradicted_more = lambda fork, k, estimates, loop_closer, jump: contradicted
+    # the chosen branch 40 of 400 points on the map's free space, the rival's none; or neither's
+    forks._on_free = lambda fork, k, estimates, loop_closer, jump=None: \
+        (40 if contradicted and jump is None else 0, 400)
     estimates = {k: p for k, p in enumerate(walk(6))}  # the chosen branch: straight on
     rival = compose(estimates[2], [0.0, 0.0, np.pi])
     for k in range(6):
@@ -105,8 +106,8 @@ def test_a_branch_is_contradicted_by_walls_where_the_map_before_the_fork_saw_thr
     across = np.column_stack([np.full(20, 2.0), np.linspace(-0.5, 0.5, 20)])  # a wall across the line
     forks = Forks.from_config(SlamConfig())
     closer = SimpleNamespace(points={1: SimpleNamespace(xy=across, normals=np.full(20, np.nan))})
-    assert forks._contradicted(fork, 1, {1: np.zeros(3)}, closer)
-    assert not forks._contradicted(fork, 1, {1: np.array([3.0, 0.0, 0.0])}, closer)  # on the wall at x = 5
+    assert forks._contradicted(*forks._on_free(fork, 1, {1: np.zeros(3)}, closer))
+    assert not forks._contradicted(*forks._on_free(fork, 1, {1: np.array([3.0, 0.0, 0.0])}, closer))  # on the wall
 
 
 def test_the_chosen_branch_must_be_contradicted_significantly_more_than_the_rivals():
@@ -114,11 +115,7 @@ def test_the_chosen_branch_must_be_contradicted_significantly_more_than_the_riva
     evidence (a wrong wall, hall-random-13), 6 against 2 (a ghost a scan, shelf-hall seed 2) and
     3 against 3 are not; the evidence grows with the counts, not with one point's place."""
     forks = Forks.from_config(SlamConfig())
-    jump = np.array([1.0, 0.0, np.pi])
-
-    def decided(chosen, rival):
-        forks._on_free = lambda fork, k, estimates, loop_closer, j=None: (chosen if j is None else rival, 400)
-        return forks._contradicted_more(None, 0, {}, None, jump)
+    decided = forks._contradicted_more
 
     assert decided(15, 0) and decided(7, 0) and decided(12, 2)
     assert not decided(6, 2) and not decided(3, 3) and not decided(0, 0) and not decided(6, 0)

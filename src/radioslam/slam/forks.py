@@ -120,24 +120,21 @@ class Forks:
                                          np.zeros(1), np.zeros(1, int)).ravel() < 0 for m in keys]
         return (int(np.count_nonzero(np.concatenate(on_free))), sum(map(len, on_free))) if on_free else (0, 0)
 
-    def _contradicted(self, fork: Fork, k: int, estimates: dict[int, np.ndarray], loop_closer: LoopCloser) -> bool:
-        """Whether the chosen branch put at least ``fork_contradicted`` of its points since the fork (scans
-        fork … k at their latest poses) on space the map from before the fork saw through: evidence
-        against the branch, not only for a rival. An exploring branch closes no loop with that map, and a
-        rival in the mapped part of a symmetric room does; only a wrong branch puts walls where the
-        terminal once walked or looked through. Counted over the whole stretch, not per scan."""
-        on_free, points = self._on_free(fork, k, estimates, loop_closer)
+    def _contradicted(self, on_free: int, points: int) -> bool:
+        """Whether the chosen branch put at least ``fork_contradicted`` of its ``points`` since the fork
+        (``on_free`` of them, :meth:`_on_free`) on space the map from before the fork saw through:
+        evidence against the branch, not only for a rival. An exploring branch closes no loop with that
+        map, and a rival in the mapped part of a symmetric room does; only a wrong branch puts walls where
+        the terminal once walked or looked through. Counted over the whole stretch, not per scan."""
         return points > 0 and on_free >= self.cfg.fork_contradicted * points
 
-    def _contradicted_more(self, fork: Fork, k: int, estimates: dict[int, np.ndarray], loop_closer: LoopCloser,
-                           jump: np.ndarray) -> bool:
-        """Whether the chosen branch has significantly more points on that free space than the rival's (a
-        sign test): radio ghosts land on free space on either branch alike, a wrong branch's walls add
-        to its own count. If the choice is right, the chosen branch's share of the T points on free
-        space of both is at most Binomial(T, ½); the rival is evidenced when P(share ≥ observed) ≤
-        ``fork_significance`` (15 against 0: 3·10⁻⁵; a ghost a scan, 6 against 2: 0.14)."""
-        chosen, _ = self._on_free(fork, k, estimates, loop_closer)
-        rival, _ = self._on_free(fork, k, estimates, loop_closer, jump)
+    def _contradicted_more(self, chosen: int, rival: int) -> bool:
+        """Whether the chosen branch has significantly more points on that free space (``chosen``) than the
+        rival's (``rival``; a sign test): radio ghosts land on free space on either branch alike, a wrong
+        branch's walls add to its own count. If the choice is right, the chosen branch's share of the
+        T points on free space of both is at most Binomial(T, ½); the rival is evidenced when
+        P(share ≥ observed) ≤ ``fork_significance`` (15 against 0: 3·10⁻⁵; a ghost a scan, 6 against 2:
+        0.14)."""
         return chosen > 0 and float(binom.sf(chosen - 1, chosen + rival, 0.5)) <= self.cfg.fork_significance
 
     def hypotheses(self, k: int, estimates: dict[int, np.ndarray]):
@@ -161,11 +158,13 @@ class Forks:
         """Scan k, its own loops ``loops``; the decision of a fork (or two) for its rival, else None."""
         if status not in (ScanStatus.MATCHED, ScanStatus.AMBIGUOUS):
             return None
-        contradicted: dict[int, bool] = {}
+        chosen_on_free: dict[int, tuple[int, int]] = {}  # per fork: the chosen branch's (on free space, points)
         for fork, switches, jump in self.hypotheses(k, estimates):
-            if fork.key not in contradicted:
-                contradicted[fork.key] = self._contradicted(fork, k, estimates, loop_closer)
-            if not contradicted[fork.key] or not self._contradicted_more(fork, k, estimates, loop_closer, jump):
+            if fork.key not in chosen_on_free:
+                chosen_on_free[fork.key] = self._on_free(fork, k, estimates, loop_closer)
+            on_free, points = chosen_on_free[fork.key]
+            if not self._contradicted(on_free, points) or \
+                    not self._contradicted_more(on_free, self._on_free(fork, k, estimates, loop_closer, jump)[0]):
                 continue  # the chosen branch disagrees with the map from before the fork no more than the rival
             chosen = max((lc.score for lc in loops if lc.anchor < fork.key), default=0.0)
             rival = compose(jump, estimates[k])

@@ -49,7 +49,8 @@ class Step:
 
     def noted(self, text: str, status: ScanStatus | None = None) -> "Step":
         """This step with ``text`` added to its note (and its status replaced, when given)."""
-        return replace(self, note="; ".join(filter(None, [self.note, text])), status=status or self.status)
+        note = "; ".join(filter(None, [self.note, text]))
+        return replace(self, note=note, status=self.status if status is None else status)
 
 
 def fuse(pose: np.ndarray, covariance: np.ndarray, weight: float, prior: np.ndarray,

@@ -161,11 +161,6 @@ class LikelihoodGrid:
             like = np.where(like > 0, like * agree, like)
         return like
 
-    def normal_at(self, points: np.ndarray) -> np.ndarray:
-        """World normal of the nearest map point to each point (..., 2)."""
-        c = self.cells(points)
-        return self.normals[c[..., 0], c[..., 1]]
-
     def interpolate(self, points: np.ndarray, on_plane: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Bilinear likelihood (P,) between cell centres and its gradient (P, 2) in world
         units, point-to-plane where ``on_plane`` (P,)."""
@@ -175,7 +170,8 @@ class LikelihoodGrid:
     def sample(self, x: np.ndarray, y: np.ndarray, on_plane: np.ndarray):
         """At world points (x, y) (any shape, alike): the bilinear likelihood between cell centres, its
         gradient ∂/∂x and ∂/∂y in world units (point-to-plane where ``on_plane``, broadcast against x),
-        and the world normal of the nearest map point (:meth:`normal_at`): one pass for the refinement."""
+        and the world normal of the nearest map point (in the cell holding the point): one pass for the
+        refinement."""
         ox, oy = self.origin
         res, (nx, ny) = self.resolution, self.values.shape
         u, v = (x - ox) / res - 0.5, (y - oy) / res - 0.5
