@@ -11,7 +11,7 @@ from radioslam.slam import RadioSlam, ScanStatus, SlamConfig
 from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.correlative import candidate_likelihoods, correlative_match
 from radioslam.slam.grid import LikelihoodGrid
-from radioslam.slam.normals import specular_normals
+from radioslam.slam.normals import oblique_walls, specular_normals
 from radioslam.slam.refine import refine_pose
 from radioslam.slam.se2 import between, compose, inverse, transform_points
 
@@ -272,3 +272,17 @@ def test_match_the_map_does_not_support_keeps_the_prediction(rng):
     assert not result.tracking_lost  # one predicted scan between matched ones is a new view
     rel = between(result.poses[0], result.poses)
     assert np.abs(rel[:, :2] - between(poses[0], poses)[:, :2]).max() < 0.05
+
+
+def test_an_arc_on_a_nearer_wall_line_is_that_wall_seen_obliquely():
+    """A wall of normal ψ = −39° with its foot at 2.41 m is met by the beam at θ at 2.41 / cos(θ − ψ):
+    arcs there (at −16° and −66°, 2.63 m) are that wall, and carry its normal; an arc of another wall
+    (a corner's second wall at 4.4 m, normal 25°) and the wall itself keep theirs."""
+    psi, rho = np.radians(-39.0), 2.41
+    bearing = np.radians(np.array([-39.0, -16.0, -66.0, 25.0]))
+    foot = np.array([rho, rho / np.cos(np.radians(23.0)), rho / np.cos(np.radians(27.0)), 4.42])
+    assert oblique_walls(bearing, foot, 0.10).tolist() == [-1, 0, 0, -1]
+    assert np.isclose(bearing[0], psi)
+    # off the line by more than the tolerance (a parallel wall 0.3 m behind): its own wall
+    assert oblique_walls(bearing[:2], foot[:2] + [0.0, 0.3], 0.10).tolist() == [-1, -1]
+    assert oblique_walls(np.zeros(0), np.zeros(0), 0.10).tolist() == []

@@ -23,9 +23,10 @@ robot mapping", IJRR 2013: keep the alternatives, let the data pick one):
      (a sign test at ``fork_significance``: radio ghosts land there on either branch, one a scan
      on shelf-hall's true branch). An exploring branch closes no loop with the old map while a
      rival in its mapped part may (a square room's 90° twin): a missing loop is no evidence
-     against the choice, a wall where the terminal once looked through is;
-   - the frozen map does not look alike under the jump
-     (:meth:`radioslam.slam.loop_closer.LoopCloser.looks_alike`: a rectangle turned by 180°).
+     against the choice, a wall where the terminal once looked through is. Where the room looks
+     alike under the jump (a rectangle turned by 180°) both branches put their points on walls
+     alike and the test keeps the choice; where it looks alike only near the turn (a straight
+     hall turned about its centre line) the scans after it, walking on, tell the branches apart.
 
    Then the step into the fork scan is replaced by the rival's, which carries every later pose
    by the jump (:meth:`radioslam.slam.back_end.BackEnd.switch`), and the rival loop joins the
@@ -55,17 +56,11 @@ from radioslam.slam.status import ScanStatus
 @dataclass(frozen=True)
 class Fork:
     """An ambiguous scan and its turned rivals, each as its step from the pose before it, with the
-    map from before it (as it stood then: what the similarity test reads)."""
+    map from before it, as it stood then (what both branches are judged by)."""
 
     key: int
     rivals: np.ndarray  # (R, 3) each rival's pose in the frame of pose key − 1
     grid: LikelihoodGrid  # the map of the scans before it
-    poses: dict[int, np.ndarray]  # those scans' poses then
-
-    @property
-    def keys(self) -> list[int]:
-        """The scans before it."""
-        return list(self.poses)
 
     def jumps(self, estimates: dict[int, np.ndarray]) -> np.ndarray:
         """(R, 3) world transforms carrying the chosen branch (latest estimates) onto each rival's."""
@@ -107,7 +102,7 @@ class Forks:
             return
         self.open = self.open[len(self.open) + 1 - self.cfg.fork_limit:]  # the latest fork_limit − 1
         self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned]),
-                              loop_closer.whole_map(keys, estimates)[0], {m: estimates[m] for m in keys}))
+                              loop_closer.whole_map(keys, estimates)[0]))
 
     @staticmethod
     def _on_free(fork: Fork, k: int, estimates: dict[int, np.ndarray], loop_closer: LoopCloser,
@@ -167,12 +162,7 @@ class Forks:
                     not self._contradicted_more(on_free, self._on_free(fork, k, estimates, loop_closer, jump)[0]):
                 continue  # the chosen branch disagrees with the map from before the fork no more than the rival
             chosen = max((lc.score for lc in loops if lc.anchor < fork.key), default=0.0)
-            rival = compose(jump, estimates[k])
-            # the map around the rival's place, carried back to the chosen one, must not land on walls
-            # again: else the room looks the same from both (a rectangle turned by 180°)
-            if loop_closer.looks_alike(inverse(jump), rival, fork.keys, fork.grid, fork.poses):
-                continue
-            found = loop_closer.close(k, estimates, version, drift, pose=rival, before=fork.key)
+            found = loop_closer.close(k, estimates, version, drift, pose=compose(jump, estimates[k]), before=fork.key)
             best = max(found, key=lambda lc: lc.score * lc.weight, default=None)
             if best is None or best.weight < self.cfg.fork_weight or \
                     best.score <= (1.0 + self.cfg.fork_gain) * chosen:

@@ -57,9 +57,28 @@ def specular_arcs(scan: Scan, arc_range_m: float) -> tuple[np.ndarray, np.ndarra
     vertex = 0.5 * (x[:, 0] + x[:, 1]) - d01 / (2 * np.minimum(curvature, -1e-12))
     phi = np.full(len(start), np.nan)
     phi[interior] = np.clip(vertex, x[:, 0], x[:, 2])
-    normals[order] = wrap_angle(phi[arc] + boresight)
-    sightings = np.stack([wrap_angle(phi[interior] + boresight[k]), rng[k]], axis=1)
-    return normals, sightings
+    bearing = wrap_angle(phi[interior] + boresight[k])  # each arc's normal, terminal frame
+    wall = oblique_walls(bearing, rng[k], arc_range_m)
+    phi[interior] = np.where(wall >= 0, bearing[wall], bearing)  # now terminal-frame bearings
+    normals[order] = phi[arc]
+    return normals, np.stack([bearing, rng[k]], axis=1)[wall < 0]
+
+
+def oblique_walls(bearing: np.ndarray, foot_range: np.ndarray, tolerance: float,
+                  max_angle: float = np.radians(75.0)) -> np.ndarray:
+    """For each arc (normal ``bearing``, peak range ``foot_range``), the nearer arc whose wall line it
+    lies on (−1: none): a beam at θ meets the wall of normal ψ and foot range ρ at range ρ / cos(θ − ψ),
+    so an arc there at r with r·cos(φ − ψ) = ρ (within ``tolerance``) is that wall seen obliquely,
+    its power peaking on another orientation's pattern rather than on the wall's normal. It carries
+    that wall's normal, not a false one (a false normal made the nearest-normal lookups of a walk
+    along a wall prefer a zero step), and is no sighting of a wall of its own."""
+    if len(bearing) == 0:
+        return np.zeros(0, dtype=np.intp)
+    turn = wrap_angle(bearing[:, None] - bearing[None, :])
+    on_line = np.abs(foot_range[:, None] * np.cos(turn) - foot_range[None, :]) <= tolerance
+    oblique = on_line & (foot_range[None, :] < foot_range[:, None] - tolerance) & (np.abs(turn) < max_angle)
+    nearest = np.argmin(np.where(oblique, foot_range[None, :], np.inf), axis=1)  # the nearest such wall
+    return np.where(oblique.any(axis=1), nearest, -1)
 
 
 def wall_points(scan: Scan, normals: np.ndarray) -> np.ndarray:
