@@ -205,3 +205,27 @@ def test_walls_left_without_sightings_by_placement_are_dropped(rng):
     result = PlaneAdjustment.from_config(PlaneAdjustmentConfig()).refine(start, sightings, steps(len(start)), unplaced)
     assert result.placed == [10, 11, 12]
     assert len(result.walls) == 5 and np.isfinite(result.walls).all()
+
+
+def test_a_stretch_left_to_the_motion_is_searched_as_far_as_its_steps_may_be_off(rng):
+    """The first scans of a walk that the walls could not fix along it (the pace not yet known: steps
+    of zero) collapse onto the sixth: the first is five steps, 1.7 m, off, beyond one step's search
+    (``place_search_m`` 1.5 m). Each step of such a stretch may be off by that much, so the stretch is
+    searched as far as its length times it and every scan of it is placed; searched one step far,
+    the first is left where it was. (A diagonal wall keeps the room from looking alike turned.)"""
+    room = np.vstack([ROOM, [[np.pi / 4, 5.5]]])
+    truth = walk()
+    start = pose_graph_like(truth, rng)
+    start[:5] = start[5]
+    assert np.linalg.norm(truth[0, :2] - truth[5, :2]) > PlaneAdjustmentConfig().place_search_m
+    degenerate = np.zeros(len(truth), bool)
+    degenerate[:5] = True
+    sightings = sightings_of(truth, room, rng)
+    result = PlaneAdjustment.from_config(PlaneAdjustmentConfig()).refine(
+        start, sightings, steps(len(start)), None, degenerate)
+    assert result.placed == [0, 1, 2, 3, 4]
+    aligned, _ = align(result.poses, truth)
+    assert np.all(np.linalg.norm(aligned[:5, :2] - truth[:5, :2], axis=1) < 0.03)
+    one_step = PlaneAdjustment.from_config(PlaneAdjustmentConfig()).refine(
+        start, sightings, steps(len(start)), None, degenerate & (np.arange(len(truth)) > 0))
+    assert 0 not in one_step.placed  # alone, the first scan is searched one step far: 1.7 m is beyond

@@ -166,6 +166,9 @@ class RadioSlam:
         adjuster = PlaneAdjustment.from_config(cfg.plane_adjustment) if cfg.plane_adjustment.enabled else None
         unplaced = np.array([s.status in (ScanStatus.PREDICTED, ScanStatus.SKIPPED) for s in steps])
         degenerate = np.array([s.status is ScanStatus.DEGENERATE for s in steps])
+        # the first scan is matched to nothing: where the step out of it fixes no position (the second
+        # scan unplaced or degenerate, a hall walked along from its start), neither is its own
+        degenerate[:1] |= (unplaced | degenerate)[1:2] & ~unplaced[:1]
         adjusted = adjuster.refine(poses, sightings, back_end.step_covariance, unplaced, degenerate) \
             if adjuster else None
         for k in [] if adjusted is None else adjusted.placed:

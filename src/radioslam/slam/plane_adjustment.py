@@ -123,6 +123,7 @@ class PlaneAdjustment:
         placed within it on the walls that the other scans' sightings make (their means at the pose
         graph's poses)."""
         unplaced = search > 0
+        reach = self.search_m * _stretch_lengths(unplaced)  # each step of a stretch left to the motion may be off
         start, wall = poses.copy(), wall.copy()
         placed_by = (wall >= 0) & ~unplaced[scan]
         if not unplaced.any() or not placed_by.any():
@@ -131,7 +132,7 @@ class PlaneAdjustment:
         walls, number = walls[counts > 0], np.flatnonzero(counts > 0)
         for k in np.flatnonzero(unplaced):
             rows = np.flatnonzero(scan == k)
-            found = place(poses[k], observed[rows], walls, search[k], self.search_m, self.gate_rad, self.gate_m / 3)
+            found = place(poses[k], observed[rows], walls, search[k], reach[k], self.gate_rad, self.gate_m / 3)
             if found is not None:
                 start[k] = found[0]
                 wall[rows] = np.where(found[1] >= 0, number[found[1]], -1)
@@ -313,3 +314,14 @@ class _Problem:
         sighted = np.repeat(tukey_weights(np.hypot(e_psi, e_d), self.c), 2)
         weight = np.concatenate([sighted, np.ones(3 * len(a) + 3 * self.n_poses)])
         return residual, jac, weight
+
+
+def _stretch_lengths(flags: np.ndarray) -> np.ndarray:
+    """For each flagged entry the length of the run of consecutive flagged entries it belongs to (0 where
+    not flagged)."""
+    flags = np.asarray(flags, bool)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], flags.astype(np.int8), [0]])))
+    runs = edges[1::2] - edges[::2]
+    lengths = np.zeros(len(flags))
+    lengths[flags] = np.repeat(runs, runs)
+    return lengths
