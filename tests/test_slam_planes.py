@@ -210,9 +210,11 @@ def test_walls_left_without_sightings_by_placement_are_dropped(rng):
 def test_a_stretch_left_to_the_motion_is_searched_as_far_as_its_steps_may_be_off(rng):
     """The first scans of a walk that the walls could not fix along it (the pace not yet known: steps
     of zero) collapse onto the sixth: the first is five steps, 1.7 m, off, beyond one step's search
-    (``place_search_m`` 1.5 m). Each step of such a stretch may be off by that much, so the stretch is
-    searched as far as its length times it and every scan of it is placed; searched one step far,
-    the first is left where it was. (A diagonal wall keeps the room from looking alike turned.)"""
+    (``place_search_m`` 1.5 m). Each step left to the motion may be off by that much, so a scan is
+    searched as far as its steps from the nearest fixed scan times it and every scan of the stretch
+    is placed; searched one step far, the first is left where it was. (A diagonal wall keeps the
+    room from looking alike turned; three scans standing still in the symmetric room are placed
+    too, the middle one searched two steps far: ``test_walls_left_without_sightings…``.)"""
     room = np.vstack([ROOM, [[np.pi / 4, 5.5]]])
     truth = walk()
     start = pose_graph_like(truth, rng)

@@ -123,7 +123,7 @@ class PlaneAdjustment:
         placed within it on the walls that the other scans' sightings make (their means at the pose
         graph's poses)."""
         unplaced = search > 0
-        reach = self.search_m * _stretch_lengths(unplaced)  # each step of a stretch left to the motion may be off
+        reach = self.search_m * _steps_from_fixed(unplaced)  # each step left to the motion may be off that much
         start, wall = poses.copy(), wall.copy()
         placed_by = (wall >= 0) & ~unplaced[scan]
         if not unplaced.any() or not placed_by.any():
@@ -316,12 +316,12 @@ class _Problem:
         return residual, jac, weight
 
 
-def _stretch_lengths(flags: np.ndarray) -> np.ndarray:
-    """For each flagged entry the length of the run of consecutive flagged entries it belongs to (0 where
-    not flagged)."""
+def _steps_from_fixed(flags: np.ndarray) -> np.ndarray:
+    """For each flagged pose the number of steps to the nearest unflagged one, either way (the whole
+    length where none is; 0 where not flagged): how many steps its position rests on the motion."""
     flags = np.asarray(flags, bool)
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], flags.astype(np.int8), [0]])))
-    runs = edges[1::2] - edges[::2]
-    lengths = np.zeros(len(flags))
-    lengths[flags] = np.repeat(runs, runs)
-    return lengths
+    count, index = len(flags), np.arange(len(flags))
+    before = np.maximum.accumulate(np.where(flags, -1, index))  # the last unflagged pose up to each
+    after = np.minimum.accumulate(np.where(flags, count, index)[::-1])[::-1]  # the next from each on
+    steps = np.minimum(np.where(before >= 0, index - before, count), np.where(after < count, after - index, count))
+    return np.where(flags, steps, 0).astype(float)
