@@ -55,12 +55,11 @@ def specular_arcs(scan: Scan, arc_range_m: float) -> tuple[np.ndarray, np.ndarra
     d01, d12 = (y[:, 1] - y[:, 0]) / (x[:, 1] - x[:, 0]), (y[:, 2] - y[:, 1]) / (x[:, 2] - x[:, 1])
     curvature = (d12 - d01) / (x[:, 2] - x[:, 0])
     vertex = 0.5 * (x[:, 0] + x[:, 1]) - d01 / (2 * np.minimum(curvature, -1e-12))
-    phi = np.full(len(start), np.nan)
-    phi[interior] = np.clip(vertex, x[:, 0], x[:, 2])
-    bearing = wrap_angle(phi[interior] + boresight[k])  # each arc's normal, terminal frame
+    bearing = wrap_angle(np.clip(vertex, x[:, 0], x[:, 2]) + boresight[k])  # each arc's normal, terminal frame
     wall = oblique_walls(bearing, rng[k], arc_range_m)
-    phi[interior] = np.where(wall >= 0, bearing[wall], bearing)  # now terminal-frame bearings
-    normals[order] = phi[arc]
+    arc_normal = np.full(len(start), np.nan)
+    arc_normal[interior] = np.where(wall >= 0, bearing[wall], bearing)
+    normals[order] = arc_normal[arc]
     return normals, np.stack([bearing, rng[k]], axis=1)[wall < 0]
 
 
