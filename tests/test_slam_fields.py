@@ -104,6 +104,27 @@ def test_the_motion_decides_what_the_scan_cannot_tell_apart_and_no_more():
     assert choose(candidates, np.array([0.30, 0.90]), np.array([0.0, 0.30]), margin, turn, trusted) == 1
 
 
+def test_the_scans_own_best_is_refined_whatever_its_rank_by_discounted_score():
+    """The front end refines the candidates :func:`choose` may pick: the best by discounted score
+    (branch and bound's order) and the best by the scan's own score. hall-random-13 with every range
+    moved by 1 µm: its U-turn (raw 0.67, against 0.38–0.43 for walking on) ranked fifth by discounted
+    score, was never refined, and the walk went on straight (2.87 m ATE, against 0.007 m unperturbed)."""
+    from radioslam.slam import SlamConfig
+    from radioslam.slam.front_end import FrontEnd
+
+    cfg = SlamConfig()
+    front_end = FrontEnd.from_config(cfg)
+    count = cfg.front_end.refined_candidates
+    walk_on = np.array([[0.5 * i, 0.0, 0.0] for i in range(count + 2)])  # distinct: 0.5 m apart
+    u_turn = np.array([[-0.7, -0.1, np.pi - 0.1]])
+    candidates = np.concatenate([walk_on, u_turn])  # branch and bound's order: discounted score
+    scores = np.concatenate([np.full(count + 2, 0.42), [0.67]])
+    refined = front_end._contenders(candidates, scores)
+    assert any(np.allclose(r, u_turn[0]) for r in refined)
+    assert sum(np.allclose(r, w) for r in refined for w in walk_on[:count]) == count  # the motion's picks stay
+    assert len(refined) <= 2 * count
+
+
 def test_a_grid_as_wide_as_its_field_reaches_scores_every_placement_as_a_wider_one(rng):
     """``field_reach`` (6σ, or a wall's plane field along it) is as far as a field is nonzero: a grid
     with that margin gives every lookup, point-to-point and point-to-plane, with its normal

@@ -128,8 +128,7 @@ class FrontEnd:
             np.array([h.pose for h in hypotheses]))
         if found.pose is None:
             return Step(primary, self.predicted, ScanStatus.PREDICTED, 0.0, note="nothing in the local map matches")
-        candidates, _ = distinct(found.candidates, found.scores, cfg.distinct_m, np.radians(cfg.distinct_deg),
-                                 cfg.refined_candidates)
+        candidates = self._contenders(found.candidates, found.scores)
         # each candidate refined off the lattice and scored on the interpolated field: a pose between
         # cells must not lose to one that happens to sit on the lattice
         candidates = refine_poses(grid, xy, phi, candidates, self.grid_cfg.resolution_m, self.step_rad)
@@ -173,6 +172,20 @@ class FrontEnd:
         if weight < 1.0:
             pose, cov = fuse(pose, cov, weight, primary, self.predicted)
         return Step(pose, cov, status, score, rivals, note, contradicted)
+
+    def _contenders(self, candidates: np.ndarray, scores: np.ndarray) -> np.ndarray:
+        """The distinct candidates :func:`choose` may pick, to be refined: the best ``refined_candidates``
+        by discounted score (branch and bound's order: the motion's picks) and as many by the scan's own
+        score (a turn the scan shows clearly better wins whatever its discount: a U-turn ranked fifth by
+        discounted score must not be lost before the choice sees it)."""
+        cfg = self.cfg
+        radius_m, radius_rad, count = cfg.distinct_m, np.radians(cfg.distinct_deg), cfg.refined_candidates
+        by_motion, _ = distinct(candidates, scores, radius_m, radius_rad, count)
+        by_scan, _ = distinct(candidates[np.argsort(-scores, kind="stable")], np.sort(scores)[::-1], radius_m,
+                              radius_rad, count)
+        both = np.concatenate([by_motion, by_scan])
+        merged, _ = distinct(both, np.zeros(len(both)), radius_m, radius_rad, 2 * count)
+        return merged
 
     def _across(self, rivals: np.ndarray, pose: np.ndarray, weak: np.ndarray) -> np.ndarray:
         """The rivals that differ from ``pose`` other than by sliding along the weak direction."""
