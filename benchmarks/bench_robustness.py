@@ -34,7 +34,7 @@ from radioslam.scene.procedural import Case, robustness_suite
 from radioslam.sensing import Receiver
 from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import Simulator
-from radioslam.slam import RadioSlam, ScanStatus
+from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, load_slam_config
 
 FIELDS = ("range_m", "angle_rad", "power_db", "beam", "orientation")
 SUCCESS_M, LOST_M = 0.2, 1.0
@@ -65,12 +65,13 @@ def sensed_scans(case: Case, cache: Path) -> list[Scan]:
     return cached_scans(case.scene, case.seed, cache)
 
 
-def run_case(case: Case, cache: Path, peers: bool = True, perturb_m: float = 0.0) -> dict:
+def run_case(case: Case, cache: Path, peers: bool = True, perturb_m: float = 0.0,
+             config: SlamConfig | None = None) -> dict:
     scans = sensed_scans(case, cache)
     if perturb_m > 0:
         scans = perturbed(scans, np.random.default_rng(case.seed), perturb_m)
     tick = time.perf_counter()
-    result = RadioSlam().run(scans)
+    result = RadioSlam(config).run(scans)
     seconds = time.perf_counter() - tick
     skipped = {"kiss-icp": "skipped", "small-gicp": "skipped"}
     return {"case": case.name, "room": case.room.value, "motion": case.motion.value, "snr_db": case.snr_db,
@@ -180,6 +181,7 @@ def main() -> None:
     ap.add_argument("--no-peers", action="store_true")
     ap.add_argument("--json", type=Path, help="also write the rows here")
     ap.add_argument("--only", help="run the cases whose name contains this")
+    ap.add_argument("--config", type=Path, help="YAML file whose slam: section sets the SLAM")
     ap.add_argument("--perturb-m", type=float, default=0.0, help="every range moved within ± this (seeded per case)")
     args = ap.parse_args()
     cases = robustness_suite(args.runs, args.seed)
@@ -189,7 +191,8 @@ def main() -> None:
         cases = [c for c in cases if args.only in c.name]
     with ProcessPoolExecutor(args.jobs) as pool:  # sense uncached cases in parallel
         list(pool.map(sensed_scans, cases, [args.cache] * len(cases)))
-    rows = [run_case(c, args.cache, not args.no_peers, args.perturb_m) for c in cases]
+    config = load_slam_config(args.config) if args.config else None
+    rows = [run_case(c, args.cache, not args.no_peers, args.perturb_m, config) for c in cases]
     print(table(rows))
     print()
     print(summary(rows))

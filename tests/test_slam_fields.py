@@ -104,11 +104,14 @@ def test_the_motion_decides_what_the_scan_cannot_tell_apart_and_no_more():
     assert choose(candidates, np.array([0.30, 0.90]), np.array([0.0, 0.30]), margin, turn, trusted) == 1
 
 
-def test_the_scans_own_best_is_refined_whatever_its_rank_by_discounted_score():
+def test_a_turn_the_scan_shows_is_refined_whatever_its_rank_by_discounted_score():
     """The front end refines the candidates :func:`choose` may pick: the best by discounted score
-    (branch and bound's order) and the best by the scan's own score. hall-random-13 with every range
-    moved by 1 µm: its U-turn (raw 0.67, against 0.38–0.43 for walking on) ranked fifth by discounted
-    score, was never refined, and the walk went on straight (2.87 m ATE, against 0.007 m unperturbed)."""
+    (branch and bound's order) and those the scan explains clearly better whose discounted score is
+    within the margin of the best. hall-random-13 with every range moved by 1 µm: its U-turn (raw
+    0.67, against 0.38–0.43 for walking on) ranked fifth by discounted score, was never refined, and
+    the walk went on straight (2.87 m ATE, against 0.007 m unperturbed). One the motion rules out is
+    not refined: shelf-hall's scan 121 has a 180° twin of raw score 0.83 (0.63 in place) discounted to
+    0.46 (0.58): refined, it became a rival, and the fork it opened was taken wrongly (5.2 m)."""
     from radioslam.slam import SlamConfig
     from radioslam.slam.front_end import FrontEnd
 
@@ -119,10 +122,16 @@ def test_the_scans_own_best_is_refined_whatever_its_rank_by_discounted_score():
     u_turn = np.array([[-0.7, -0.1, np.pi - 0.1]])
     candidates = np.concatenate([walk_on, u_turn])  # branch and bound's order: discounted score
     scores = np.concatenate([np.full(count + 2, 0.42), [0.67]])
-    refined = front_end._contenders(candidates, scores)
-    assert any(np.allclose(r, u_turn[0]) for r in refined)
-    assert sum(np.allclose(r, w) for r in refined for w in walk_on[:count]) == count  # the motion's picks stay
-    assert len(refined) <= 2 * count
+
+    def refined_u_turn(u_turn_discount):
+        discount = np.concatenate([np.full(count + 2, 0.10), [u_turn_discount]])
+        refined = front_end._contenders(candidates, scores, discount)
+        assert sum(np.allclose(r, w) for r in refined for w in walk_on[:count]) == count  # the motion's picks
+        assert len(refined) <= 2 * count
+        return any(np.allclose(r, u_turn[0]) for r in refined)
+
+    assert refined_u_turn(0.44)  # discounted 0.375 against 0.378: within the margin
+    assert not refined_u_turn(0.55)  # discounted 0.30: the motion rules it out
 
 
 def test_a_grid_as_wide_as_its_field_reaches_scores_every_placement_as_a_wider_one(rng):

@@ -128,7 +128,8 @@ class FrontEnd:
             np.array([h.pose for h in hypotheses]))
         if found.pose is None:
             return Step(primary, self.predicted, ScanStatus.PREDICTED, 0.0, note="nothing in the local map matches")
-        candidates = self._contenders(found.candidates, found.scores)
+        candidates = self._contenders(found.candidates, found.scores,
+                                      self._prior_discount(found.candidates, hypotheses))
         # each candidate refined off the lattice and scored on the interpolated field: a pose between
         # cells must not lose to one that happens to sit on the lattice
         candidates = refine_poses(grid, xy, phi, candidates, self.grid_cfg.resolution_m, self.step_rad)
@@ -173,16 +174,21 @@ class FrontEnd:
             pose, cov = fuse(pose, cov, weight, primary, self.predicted)
         return Step(pose, cov, status, score, rivals, note, contradicted)
 
-    def _contenders(self, candidates: np.ndarray, scores: np.ndarray) -> np.ndarray:
-        """The distinct candidates :func:`choose` may pick, to be refined: the best ``refined_candidates``
-        by discounted score (branch and bound's order: the motion's picks) and as many by the scan's own
-        score (a turn the scan shows clearly better wins whatever its discount: a U-turn ranked fifth by
-        discounted score must not be lost before the choice sees it)."""
+    def _contenders(self, candidates: np.ndarray, scores: np.ndarray, discount: np.ndarray) -> np.ndarray:
+        """The distinct candidates (C, 3; lattice ``scores`` (C,) and motion-prior ``discount`` (C,)) that
+        :func:`choose` may pick, to be refined: the best ``refined_candidates`` by discounted score (branch
+        and bound's order: the motion's picks), and those the scan itself explains clearly better than all
+        of them (their own score beyond the ambiguity margin of theirs) whose discounted score is within
+        the margin of the best: a turn seen in the scan, which ``choose`` takes whatever its discount. A
+        U-turn ranked fifth by discounted score (hall-random-13, ranges moved by 1 µm) was never seen."""
         cfg = self.cfg
         radius_m, radius_rad, count = cfg.distinct_m, np.radians(cfg.distinct_deg), cfg.refined_candidates
-        by_motion, _ = distinct(candidates, scores, radius_m, radius_rad, count)
-        by_scan, _ = distinct(candidates[np.argsort(-scores, kind="stable")], np.sort(scores)[::-1], radius_m,
-                              radius_rad, count)
+        by_motion, motion_scores = distinct(candidates, scores, radius_m, radius_rad, count)
+        adjusted = scores * (1.0 - discount)
+        seen = (scores * (1.0 - cfg.ambiguity_margin) > motion_scores.max()) & \
+            (adjusted >= (1.0 - cfg.ambiguity_margin) * adjusted.max())
+        order = np.flatnonzero(seen)[np.argsort(-scores[seen], kind="stable")]
+        by_scan, _ = distinct(candidates[order], scores[order], radius_m, radius_rad, count)
         both = np.concatenate([by_motion, by_scan])
         merged, _ = distinct(both, np.zeros(len(both)), radius_m, radius_rad, 2 * count)
         return merged
