@@ -286,3 +286,37 @@ def test_an_arc_on_a_nearer_wall_line_is_that_wall_seen_obliquely():
     # off the line by more than the tolerance (a parallel wall 0.3 m behind): its own wall
     assert oblique_walls(bearing[:2], foot[:2] + [0.0, 0.3], 0.10).tolist() == [-1, -1]
     assert oblique_walls(np.zeros(0), np.zeros(0), 0.10).tolist() == []
+
+
+def test_pose_graph_marginals_grow_along_an_open_chain_and_a_kept_loop_shrinks_them():
+    """``PoseGraph.marginal_sigmas``: along an open chain of steps each pose is known less well than
+    the one before (the first is the prior's); a loop back to the start that the solution keeps fixes
+    the far end again; a loop far outside the χ² gate at the solution (one GNC rejects) fixes nothing."""
+    from radioslam.slam.pose_graph import PoseGraph
+    from radioslam.slam.se2 import between, pose_covariance
+
+    n, step_cov = 24, pose_covariance(0.02, 0.3)
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    truth = np.stack([3 * np.cos(t), 3 * np.sin(t), t + np.pi / 2], axis=1)
+
+    def chain() -> PoseGraph:
+        graph = PoseGraph()
+        for k in range(n):
+            graph.add_pose(k, truth[k])
+            if k:
+                graph.add_odometry(k - 1, k, between(truth[k - 1], truth[k]), step_cov)
+        return graph
+
+    open_chain = chain().marginal_sigmas(16.27)
+    heading = np.array([open_chain[k][2] for k in range(n)])
+    position = np.array([np.hypot(*open_chain[k][:2]) for k in range(n)])
+    assert heading[0] < 1e-4 and np.all(np.diff(heading) > 0)
+    assert position[-1] > 5 * np.hypot(0.02, 0.02)  # the heading's spread carried over the distance walked
+    closed = chain()
+    closed.add_loop(0, n - 1, between(truth[0], truth[n - 1]), step_cov)
+    closed.optimize()
+    assert np.hypot(*closed.marginal_sigmas(16.27)[n - 1][:2]) < 0.3 * position[-1]
+    rejected = chain()
+    rejected.add_loop(0, n - 1, between(truth[0], truth[n - 1]) + np.array([2.0, 0.0, 0.0]), step_cov)
+    sigmas = rejected.marginal_sigmas(16.27)  # at the chain's poses: the loop's χ² is far outside the gate
+    assert np.allclose([sigmas[k] for k in range(n)], [open_chain[k] for k in range(n)])

@@ -231,3 +231,22 @@ def test_a_stretch_left_to_the_motion_is_searched_as_far_as_its_steps_may_be_off
     one_step = PlaneAdjustment.from_config(PlaneAdjustmentConfig()).refine(
         start, sightings, steps(len(start)), None, degenerate & (np.arange(len(truth)) > 0))
     assert 0 not in one_step.placed  # alone, the first scan is searched one step far: 1.7 m is beyond
+
+
+def test_marginal_anchors_let_the_walls_take_back_an_open_chains_drift(rng):
+    """Where no loop closed, the pose graph drifts by decimetres and degrees (polygon-smooth-1007: a
+    hexagon walked five sides, 0.24 m). Anchors of 5 cm and 0.5° hold the poses there; anchors at the
+    pose graph's own marginal σ, growing along the chain, let the walls fix them."""
+    truth = walk()
+    ramp = np.linspace(0, 1, len(truth))[:, None]
+    start = truth + ramp * np.array([0.3, -0.25, np.radians(3.0)]) + \
+        rng.normal(0, 1, truth.shape) * np.array([0.01, 0.01, np.radians(0.1)])
+    sightings = sightings_of(truth, ROOM, rng)
+    adjuster = PlaneAdjustment.from_config(PlaneAdjustmentConfig())
+    fixed = adjuster.refine(start, sightings, steps(len(truth)))
+    sigma = np.sqrt(ramp) * np.array([0.3, 0.3, np.radians(3.0)]) + np.array([0.01, 0.01, np.radians(0.1)])
+    marginal = adjuster.refine(start, sightings, steps(len(truth)), pose_sigma=sigma)
+    assert position_rmse(start, truth) > 0.1
+    assert position_rmse(fixed.poses, truth) > 0.03  # 0.043: held back by its anchors
+    assert position_rmse(marginal.poses, truth) < 0.015  # 0.009
+    assert np.allclose(marginal.poses[0], start[0])  # the first pose still defines the map frame

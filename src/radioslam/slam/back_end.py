@@ -104,6 +104,11 @@ class BackEnd:
                     np.zeros((3, 3)))
         return total + np.diag([total[2, 2] * distance**2] * 2 + [0.0])
 
+    def pose_sigmas(self, count: int) -> np.ndarray | None:
+        """(count, 3) standard deviations of poses 0 … count − 1 at the latest solution (None: undetermined)."""
+        sigmas = self.graph.marginal_sigmas(self.cfg.inlier_chi2)
+        return None if sigmas is None else np.array([sigmas[k] for k in range(count)])
+
     def finish(self) -> None:
         """A last solution when any loop was closed."""
         if self.loops:

@@ -5,6 +5,7 @@ in degrees at this interface only. Loadable from the ``slam:`` section of a YAML
 
 from __future__ import annotations
 
+from enum import Enum
 from pathlib import Path
 
 import yaml
@@ -180,6 +181,16 @@ class PoseGraphConfig(_Section):
     gnc: bool = True  # loop factors robust to false closures (GncLMOptimizer)
     prior_sigma_m: float = Field(1e-4, gt=0)
     prior_sigma_deg: float = Field(5.7e-4, gt=0)
+    # a loop counts toward the poses' marginal covariances (the plane adjustment's anchors) when its χ² at
+    # the solution is within this (χ²(3) at 99.9 %: GNC kept it)
+    inlier_chi2: float = Field(16.27, gt=0)
+
+
+class Anchors(str, Enum):
+    """How loosely the plane adjustment holds each pose to the pose graph's."""
+
+    FIXED = "fixed"  # anchor_sigma_m / anchor_sigma_deg for every pose
+    MARGINAL = "marginal"  # the pose graph's marginal σ of each pose, at least those
 
 
 class PlaneAdjustmentConfig(_Section):
@@ -198,9 +209,12 @@ class PlaneAdjustmentConfig(_Section):
     min_sightings: int = Field(3, ge=2)
     # Tukey's biweight of a sighting's normalized residual: 0 beyond this many σ
     robust_c: float = Field(4.685, gt=0)
-    # each pose is held near the pose graph's with this sd (its errors), and the pose graph's steps at
-    # the front end's step covariance times step_inflation² (the scans' information is in both: not
-    # counted twice at full weight)
+    # each pose is held near the pose graph's with this sd (fixed), or with its marginal sd there, at least
+    # this (marginal: tight where loops closed, growing along an open chain: a hexagon walked five sides,
+    # 0.24 -> 0.04 m; but shelf-hall's aisle legs, where a shelf's double bounce passes for the outer
+    # wall, slide 0.08 -> 0.12 m: see docs/notes.md, session 9), and the pose graph's steps at the front
+    # end's step covariance times step_inflation² (the scans' information is in both: not counted twice)
+    anchors: Anchors = Anchors.FIXED
     anchor_sigma_m: float = Field(0.05, gt=0)
     anchor_sigma_deg: float = Field(0.5, gt=0)
     step_inflation: float = Field(3.0, gt=0)

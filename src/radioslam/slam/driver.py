@@ -17,7 +17,7 @@ import numpy as np
 
 from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.back_end import BackEnd
-from radioslam.slam.config import SlamConfig
+from radioslam.slam.config import Anchors, SlamConfig
 from radioslam.slam.errors import SlamError
 from radioslam.slam.forks import Forks
 from radioslam.slam.front_end import FrontEnd, Step
@@ -169,8 +169,9 @@ class RadioSlam:
         # the first scan is matched to nothing: where the step out of it fixes no position (the second
         # scan unplaced or degenerate, a hall walked along from its start), neither is its own
         degenerate[:1] |= (unplaced | degenerate)[1:2] & ~unplaced[:1]
-        adjusted = adjuster.refine(poses, sightings, back_end.step_covariance, unplaced, degenerate) \
-            if adjuster else None
+        marginal = cfg.plane_adjustment.anchors is Anchors.MARGINAL
+        adjusted = adjuster.refine(poses, sightings, back_end.step_covariance, unplaced, degenerate,
+                                   back_end.pose_sigmas(len(steps)) if marginal else None) if adjuster else None
         for k in [] if adjusted is None else adjusted.placed:
             steps[k] = steps[k].noted("placed on the walls the other scans sighted by the plane adjustment")
         result = self._result(steps, poses if adjusted is None else adjusted.poses, back_end, seconds,

@@ -75,14 +75,16 @@ class PlaneAdjustment:
                    np.radians(cfg.degenerate_search_deg))
 
     def refine(self, poses: np.ndarray, sightings: list[np.ndarray], step_covariance: dict[int, np.ndarray],
-               unplaced: np.ndarray | None = None, degenerate: np.ndarray | None = None) -> PlaneAdjustmentResult:
+               unplaced: np.ndarray | None = None, degenerate: np.ndarray | None = None,
+               pose_sigma: np.ndarray | None = None) -> PlaneAdjustmentResult:
         """Poses (P, 3) refined with the scans' sightings (A_k, 2: bearing, range) of walls;
         ``step_covariance[k]`` is the covariance of the step into pose k in pose k − 1's frame;
         ``unplaced`` (P,) marks the poses the front end left to the motion model (predicted,
         skipped): each is first placed on the walls the others sighted
         (:func:`radioslam.slam.wall_placement.place`) and held to the pose graph only loosely;
         ``degenerate`` (P,) marks the poses the front end fixed in heading and across the walls only:
-        each is placed within ±``degenerate_search`` of its heading and, once placed, held as loosely."""
+        each is placed within ±``degenerate_search`` of its heading and, once placed, held as loosely;
+        ``pose_sigma`` (P, 3) is the pose graph's marginal σ of each pose (None: the anchor's alone)."""
         poses = np.asarray(poses, dtype=np.float64)
         if len(sightings) != len(poses):
             raise SlamError(f"{len(sightings)} sighting lists for {len(poses)} poses", field="(sightings)")
@@ -106,7 +108,10 @@ class PlaneAdjustment:
         keep = wall >= 0
         scan, observed = scan[keep], observed[keep]
         _, wall = np.unique(wall[keep], return_inverse=True)  # dense again: placement can empty a wall
-        anchor_sigma = np.where(unplaced[:, None], self.loose_sigma, self.anchor_sigma)
+        # each pose held to the pose graph's as loosely as the pose graph knows it (its marginal σ, at least
+        # the anchor's): a stretch no loop closed drifts by decimetres and degrees, and the walls must move it
+        anchor = self.anchor_sigma if pose_sigma is None else np.maximum(self.anchor_sigma, pose_sigma)
+        anchor_sigma = np.where(unplaced[:, None], self.loose_sigma, anchor)
         problem = _Problem(start, scan, observed, wall, self._steps(poses, step_covariance, unplaced), self.sigma,
                            self.robust_c, anchor_sigma, local)
         refined, walls, used = problem.solve(self.iterations)

@@ -94,3 +94,25 @@ class PoseGraph:
         self.version += 1
         return {int(k): np.array([result.atPose2(k).x(), result.atPose2(k).y(), result.atPose2(k).theta()])
                 for k in result.keys()}
+
+    def marginal_sigmas(self, gate_chi2: float) -> dict[int, np.ndarray] | None:
+        """Each pose's standard deviations (x, y, θ; position in the world frame) at the latest solution
+        (Kaess & Dellaert, "Covariance recovery from a square root information matrix", 2009), from the
+        prior, the odometry and the loops whose χ² there is within ``gate_chi2`` (GNC's inliers: a loop it
+        rejected fixes nothing); None where the graph leaves a pose undetermined."""
+        graph = gtsam.NonlinearFactorGraph()
+        loops, inliers = {index for _, _, index in self.loops}, set(self.inliers)
+        for index in range(self.graph.size()):
+            factor = self.graph.at(index)
+            if index in inliers or (index in loops and 2.0 * factor.error(self.initial) <= gate_chi2):
+                graph.add(factor)
+        try:
+            marginals = gtsam.Marginals(graph, self.initial)
+        except RuntimeError:  # an indeterminant system
+            return None
+        sigmas = {}
+        for key in self.initial.keys():
+            rot = np.eye(3)
+            rot[:2, :2] = rotation(self.initial.atPose2(key).theta())  # Pose2's covariance is in its own frame
+            sigmas[int(key)] = np.sqrt(np.diag(rot @ marginals.marginalCovariance(key) @ rot.T))
+        return sigmas
