@@ -110,9 +110,7 @@ class PoseGraph:
             marginals = gtsam.Marginals(graph, self.initial)
         except RuntimeError:  # an indeterminant system
             return None
-        sigmas = {}
-        for key in self.initial.keys():
-            rot = np.eye(3)
-            rot[:2, :2] = rotation(self.initial.atPose2(key).theta())  # Pose2's covariance is in its own frame
-            sigmas[int(key)] = np.sqrt(np.diag(rot @ marginals.marginalCovariance(key) @ rot.T))
-        return sigmas
+        # Pose2's covariance is in its own frame: expressed in the frame turned back by θ, the world's
+        return {int(key): np.sqrt(np.diag(local_covariance(marginals.marginalCovariance(key),
+                                                           -self.initial.atPose2(key).theta())))
+                for key in self.initial.keys()}
