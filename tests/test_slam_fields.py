@@ -125,7 +125,7 @@ def test_a_turn_the_scan_shows_is_refined_whatever_its_rank_by_discounted_score(
 
     def refined_u_turn(u_turn_discount):
         discount = np.concatenate([np.full(count + 2, 0.10), [u_turn_discount]])
-        refined = front_end._contenders(candidates, scores, discount)
+        refined = front_end._contenders(candidates, scores, scores * (1.0 - discount))
         assert sum(np.allclose(r, w) for r in refined for w in walk_on[:count]) == count  # the motion's picks
         assert len(refined) <= 2 * count
         return any(np.allclose(r, u_turn[0]) for r in refined)

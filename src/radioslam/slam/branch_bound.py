@@ -40,6 +40,7 @@ class BranchBoundResult:
     # (C, 3) leaves within keep_ratio of the best, best first, and their scores
     candidates: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     scores: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    judged: np.ndarray = field(default_factory=lambda: np.zeros(0))  # their discounted scores (= scores: none)
 
 
 def window_angles(window_rad: float, step: float) -> np.ndarray:
@@ -140,7 +141,7 @@ class BranchAndBound:
         order = np.argsort(-judged, kind="stable")
         order = order[bound[order] >= keep_ratio * judged[order[0]]]
         return BranchBoundResult(poses[order[0]], float(bound[order[0]]), evaluated, exhaustive, poses[order],
-                                 bound[order])
+                                 bound[order], judged[order])
 
     def _near(self, seeds: np.ndarray, centre: np.ndarray, headings: np.ndarray, reach: int) -> np.ndarray:
         """The leaves (angle index, ox, oy) nearest the seed poses (S, 3) and their neighbours within a

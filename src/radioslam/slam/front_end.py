@@ -128,8 +128,7 @@ class FrontEnd:
             np.array([h.pose for h in hypotheses]))
         if found.pose is None:
             return Step(primary, self.predicted, ScanStatus.PREDICTED, 0.0, note="nothing in the local map matches")
-        candidates = self._contenders(found.candidates, found.scores,
-                                      self._prior_discount(found.candidates, hypotheses))
+        candidates = self._contenders(found.candidates, found.scores, found.judged)
         # each candidate refined off the lattice and scored on the interpolated field: a pose between
         # cells must not lose to one that happens to sit on the lattice
         candidates = refine_poses(grid, xy, phi, candidates, self.grid_cfg.resolution_m, self.step_rad)
@@ -174,8 +173,8 @@ class FrontEnd:
             pose, cov = fuse(pose, cov, weight, primary, self.predicted)
         return Step(pose, cov, status, score, rivals, note, contradicted)
 
-    def _contenders(self, candidates: np.ndarray, scores: np.ndarray, discount: np.ndarray) -> np.ndarray:
-        """The distinct candidates (C, 3; lattice ``scores`` (C,) and motion-prior ``discount`` (C,)) that
+    def _contenders(self, candidates: np.ndarray, scores: np.ndarray, adjusted: np.ndarray) -> np.ndarray:
+        """The distinct candidates (C, 3; lattice ``scores`` (C,) and the motion prior's ``adjusted`` ones) that
         :func:`choose` may pick, to be refined: the best ``refined_candidates`` by discounted score (branch
         and bound's order: the motion's picks), and those the scan itself explains clearly better than all
         of them (their own score beyond the ambiguity margin of theirs) whose discounted score is within
@@ -184,7 +183,6 @@ class FrontEnd:
         cfg = self.cfg
         radius_m, radius_rad, count = cfg.distinct_m, np.radians(cfg.distinct_deg), cfg.refined_candidates
         by_motion, motion_scores = distinct(candidates, scores, radius_m, radius_rad, count)
-        adjusted = scores * (1.0 - discount)
         seen = (scores * (1.0 - cfg.ambiguity_margin) > motion_scores.max()) & \
             (adjusted >= (1.0 - cfg.ambiguity_margin) * adjusted.max())
         order = np.flatnonzero(seen)[np.argsort(-scores[seen], kind="stable")]
