@@ -26,28 +26,34 @@ def walk(n: int, turn_at: int | None = None) -> np.ndarray:
 
 
 class StubCloser:
-    """The loop closer's side of a fork: a rival loop near ``place`` (to submap 0) of ``score``."""
+    """The loop closer's side of a fork: a match with the map from before it near ``place`` (tied to
+    scan 0) of ``score`` for the rival branch, and ``chosen`` (a score) for the chosen branch."""
 
-    def __init__(self, place: np.ndarray, score: float):
-        self.place, self.score, self.asked = place, score, []
+    def __init__(self, place: np.ndarray, score: float, chosen: float = 0.0):
+        self.place, self.score, self.chosen, self.asked = place, score, chosen, []
 
-    def close(self, k, estimates, version, drift, pose=None, before=None):
-        self.asked.append((k, pose, before))
-        if pose is None or np.linalg.norm(pose[:2] - self.place[:2]) > 0.5:
-            return []
-        return [LoopClosure(0, k, between(estimates[0], pose), COV, self.score, 1.0)]
+    def matched_in(self, matcher, k, pose, keys, estimates):
+        self.asked.append((k, pose, tuple(keys)))
+        if np.allclose(pose, estimates[k]):  # the chosen branch
+            return LoopClosure(0, k, between(estimates[0], pose), COV, self.chosen, 1.0) if self.chosen else None
+        if np.linalg.norm(pose[:2] - self.place[:2]) > 0.5:
+            return None
+        return LoopClosure(0, k, between(estimates[0], pose), COV, self.score, 1.0)
 
     def map_keys(self, k, before=None):
         return list(range(before))
 
     def whole_map(self, keys, estimates):
-        return None, None
+        from radioslam.slam.grid import LikelihoodGrid
+
+        wall = np.column_stack([np.full(5, 3.0), np.linspace(-1, 1, 5)])
+        return LikelihoodGrid.from_points(wall, 0.1, 0.05, 1.0, np.full(5, np.pi), np.radians(1.0), 0.5), None
 
 
-def fork_at_scan_3(closer: StubCloser, chosen_loops: list[LoopClosure] | None = None, contradicted: bool = True):
+def fork_at_scan_3(closer: StubCloser, contradicted: bool = True):
     """Scan 3 is ambiguous (the chosen pose walked on, the rival turned by 180°); scan 5 is then
-    observed with ``chosen_loops`` as its own loops, the chosen branch ``contradicted`` by the map
-    before the fork or not. Returns the decision and the estimates."""
+    observed, the chosen branch ``contradicted`` by the map before the fork or not. Returns the
+    decision and the estimates."""
     forks = Forks.from_config(SlamConfig())
     # the chosen branch 40 of 400 points on the map's free space, the rival's none; or neither's
     forks._on_free = lambda fork, k, estimates, loop_closer, jump=None: \
@@ -58,8 +64,7 @@ def fork_at_scan_3(closer: StubCloser, chosen_loops: list[LoopClosure] | None = 
         rivals = rival[None] if k == 3 else np.zeros((0, 3))
         forks.remember(k, Step(estimates[k], COV, ScanStatus.AMBIGUOUS if k == 3 else ScanStatus.MATCHED,
                                0.6, rivals), {m: estimates[m] for m in range(k + 1)}, closer)
-    decided = forks.observe(5, ScanStatus.MATCHED, chosen_loops or [], estimates, closer, 0,
-                            lambda a, b, d: COV)
+    decided = forks.observe(5, ScanStatus.MATCHED, estimates, closer)
     return decided, estimates
 
 
@@ -71,20 +76,17 @@ def test_a_rival_branch_that_closes_a_loop_the_chosen_one_does_not_is_taken():
     decided, estimates = fork_at_scan_3(closer)
     assert decided is not None and decided.fork == 3 and len(decided.switches) == 1
     np.testing.assert_allclose(compose(decided.switches[0][1], estimates[5]), truth_5, atol=1e-9)
-    assert all(before == 3 for _, pose, before in closer.asked if pose is not None)  # only the map before it
+    assert all(keys == (0, 1, 2) for _, _, keys in closer.asked)  # only the map before it
 
 
 def test_the_choice_stands_when_the_chosen_branch_closes_as_good_a_loop_or_nothing_contradicts_it():
-    """A rival loop alone is not enough: the chosen branch closing one as good (within fork_gain), or
-    a chosen branch nothing contradicts (a room that looks alike under the jump: both branches on its
-    walls), keep the choice."""
+    """A rival's match alone is not enough: the chosen branch matching the map from before the fork as
+    well (within fork_gain), or a chosen branch nothing contradicts (a room that looks alike under the
+    jump: both branches on its walls), keep the choice."""
     truth_5 = compose(compose(walk(3)[2], [0.0, 0.0, np.pi]), [2.0, 0.0, 0.0])
-    as_good = [LoopClosure(0, 5, np.zeros(3), COV, 0.55, 1.0)]  # within fork_gain of the rival's 0.6
-    assert fork_at_scan_3(StubCloser(truth_5, 0.6), as_good)[0] is None
+    assert fork_at_scan_3(StubCloser(truth_5, 0.6, 0.55))[0] is None  # within fork_gain of the rival's 0.6
     assert fork_at_scan_3(StubCloser(truth_5, 0.6), contradicted=False)[0] is None  # nothing against the choice
     assert fork_at_scan_3(StubCloser(truth_5, 0.2))[0] is not None  # weight 1: score alone does not gate
-    newer = [LoopClosure(3, 5, np.zeros(3), COV, 0.9, 1.0)]  # a loop within the chosen branch says nothing
-    assert fork_at_scan_3(StubCloser(truth_5, 0.6), newer)[0] is not None
 
 
 def test_a_branch_is_contradicted_by_walls_where_the_map_before_the_fork_saw_through():
@@ -187,10 +189,11 @@ def test_two_open_forks_are_also_tested_together_latest_switch_first():
     estimates = {k: p for k, p in enumerate(poses)}
     turn = np.array([[0.0, 0.0, np.pi]])  # each rival: turned on the spot instead of walking on
     forks = Forks.from_config(SlamConfig())
-    forks.open = [Fork(2, turn, None), Fork(5, turn, None)]
+    forks.open = [Fork(2, turn, None), Fork(5, turn, None)]  # no map needed to name the branches
     found = list(forks.hypotheses(7, estimates))
-    assert [[key for key, _ in switches] for _, switches, _ in found] == [[2], [5], [5, 2]]
-    fork, switches, jump = found[2]
+    assert [[key for key, _ in switches] for _, _, switches, _ in found] == [[2], [5], [5, 2]]
+    assert len({name for name, _, _, _ in found}) == 3  # each branch named apart, across scans
+    _, fork, switches, jump = found[2]
     assert fork.key == 2
     jump_2, jump_5 = forks.open[0].jumps(estimates)[0], forks.open[1].jumps(estimates)[0]
     np.testing.assert_allclose(jump, compose(jump_2, jump_5), atol=1e-12)
@@ -198,3 +201,27 @@ def test_two_open_forks_are_also_tested_together_latest_switch_first():
     both = compose(jump, estimates[7])
     np.testing.assert_allclose(both, compose(compose(compose(poses[1], [0, 0, np.pi]), [2.0, 0, np.pi]), [2.0, 0, 0]),
                                atol=1e-9)
+
+
+def test_a_rival_loop_closed_before_the_chosen_branch_is_contradicted_is_remembered():
+    """The rival branch closes its loop with the map from before the fork at once (the terminal walks
+    back into it), while the chosen branch's walls on that map's free space pile up only over the
+    scans after: the loop found at scan 4, when nothing contradicted the choice yet, decides at scan 5."""
+    truth_4 = compose(compose(walk(3)[2], [0.0, 0.0, np.pi]), [1.0, 0.0, 0.0])  # the rival's scan 4
+    closer = StubCloser(truth_4, 0.6)
+    forks = Forks.from_config(SlamConfig())
+    evidence = {4: 0, 5: 40}  # the chosen branch's points on the map's free space, by scan
+    forks._on_free = lambda fork, k, estimates, loop_closer, jump=None: (evidence[k] if jump is None else 0, 400)
+    estimates = {k: p for k, p in enumerate(walk(6))}
+    rival = compose(estimates[2], [0.0, 0.0, np.pi])
+    for k in range(4):
+        forks.remember(k, Step(estimates[k], COV, ScanStatus.AMBIGUOUS if k == 3 else ScanStatus.MATCHED, 0.6,
+                               rival[None] if k == 3 else np.zeros((0, 3))), {m: estimates[m] for m in range(k + 1)},
+                       closer)
+    assert forks.observe(4, ScanStatus.MATCHED, estimates, closer) is None  # not yet
+    decided = forks.observe(5, ScanStatus.MATCHED, estimates, closer)
+    assert decided is not None and decided.loop.key == 4 and decided.fork == 3
+    # forgotten with the fork: a new fork at another scan starts with nothing remembered
+    forks.open = []
+    assert forks.observe(6, ScanStatus.MATCHED, estimates, closer) is None
+    assert not forks.rival_loops and not forks.chosen_loops

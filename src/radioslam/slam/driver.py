@@ -140,17 +140,16 @@ class RadioSlam:
             loops = [] if step.status in (ScanStatus.SKIPPED, ScanStatus.DEGENERATE, ScanStatus.PREDICTED) else \
                 [self.loop_hook(lc) for lc in loop_closer.close(k, back_end.estimates, back_end.version,
                                                                  back_end.drift)]
-            # 8. an ambiguous scan's rival branch that closes a loop with the map from before it, where the
-            #    chosen branch closes none as good, is taken: every pose since carried by its jump
-            decided = forks.observe(k, step.status, loops, back_end.estimates, loop_closer, back_end.version,
-                                    back_end.drift)
+            # 8. an ambiguous scan's rival branch that matches the map from before it far better than the chosen
+            #    branch, which contradicts that map, is taken: every pose since carried by its jump
+            decided = forks.observe(k, step.status, back_end.estimates, loop_closer)
             if decided is not None:
                 back_end.switch(decided.switches)
                 loops = [lc for lc in loops if lc.anchor >= decided.fork] + [decided.loop]
                 lost_and_found.forget()
                 for key, _ in decided.switches:
-                    steps[key] = steps[key].noted(f"its rival taken at scan {k}: it closes a loop with the map "
-                                                  "from before")
+                    steps[key] = steps[key].noted(f"its rival taken at scan {k}: it matches the map from before "
+                                                  "far better")
             back_end.add_loops(loops + relocalizations)
             steps.append(step)
             seconds.append(time.perf_counter() - tick)

@@ -1,4 +1,4 @@
-"""Ambiguous scans decided by the loops the scans after them close (issue #12, point 2).
+"""Ambiguous scans decided by the scans after them against the map from before (issue #12, point 2).
 
 In a room of right angles a scan turned by 90° or 180° still matches its local map, and in a
 long hall a U-turn looks like walking on: the front end then finds rival poses, turned from
@@ -11,13 +11,17 @@ robot mapping", IJRR 2013: keep the alternatives, let the data pick one):
 
 1. each rival is the chosen branch carried by a rigid ``jump`` (recomputed from the latest
    estimates at every scan: the step into the fork scan replaced by the rival's);
-2. at each later scan, the loop closer searches the submaps wholly before the fork for the scan
-   carried by each jump (and by each pair of open forks' jumps together: a second ambiguous turn
-   inside the first's memory), with its full acceptance tests (window, score, χ² against the
-   rival branch, degeneracy): a *rival loop*;
+2. at each later scan, the scan carried by each jump (and by each pair of open forks' jumps
+   together: a second ambiguous turn inside the first's memory) is matched against the frozen
+   map from before the fork (all of its scans, the latest ones too: one grid, branch and bound
+   within the loop window, the loop closer's score and degeneracy tests,
+   :meth:`radioslam.slam.loop_closer.LoopCloser.matched_in`), and so is the chosen branch's
+   scan; each branch's best match since the fork is remembered (a rival branch walking back into
+   that map matches it at once, while the evidence against the chosen branch piles up only over
+   the scans after: kidnapped paper-cnv, found 0.32 m from its true place but turned 180°);
 3. the fork is decided for the rival when all of these hold:
-   - the rival loop has weight ≥ ``fork_weight`` and scores ``fork_gain`` better than every
-     loop the chosen branch closed with those submaps at that scan (none: 0);
+   - the rival's best match, a *rival loop*, has weight ≥ ``fork_weight`` and scores
+     ``fork_gain`` better than the chosen branch's best match with that map (none: 0);
    - the chosen branch is *contradicted*: ≥ ``fork_contradicted`` of its points since the fork
      lie on space the frozen map saw through, significantly more of them than the rival branch's
      (a sign test at ``fork_significance``: radio ghosts land there on either branch, one a scan
@@ -38,12 +42,13 @@ branch builds a local map that agrees with itself.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from scipy.stats import binom
 
+from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.config import LoopClosureConfig
 from radioslam.slam.correlative import candidate_likelihoods
 from radioslam.slam.front_end import Step
@@ -61,6 +66,13 @@ class Fork:
     key: int
     rivals: np.ndarray  # (R, 3) each rival's pose in the frame of pose key − 1
     grid: LikelihoodGrid  # the map of the scans before it
+    keys: tuple[int, ...] = ()  # those scans
+    levels: int = 5  # the branch-and-bound levels of its matcher
+
+    @cached_property
+    def matcher(self) -> BranchAndBound:
+        """Branch and bound over the map from before the fork (built once, at its first use)."""
+        return BranchAndBound(self.grid, self.levels)
 
     def jumps(self, estimates: dict[int, np.ndarray]) -> np.ndarray:
         """(R, 3) world transforms carrying the chosen branch (latest estimates) onto each rival's."""
@@ -82,13 +94,16 @@ class Decision:
 class Forks:
     """Remembers forks and tests their rivals; ``observe`` once per scan, after its loops."""
 
-    def __init__(self, cfg: LoopClosureConfig, turn_rad: float):
+    def __init__(self, cfg: LoopClosureConfig, turn_rad: float, levels: int):
         self.cfg, self.turn_rad = cfg, turn_rad  # rivals turned at least this much from the choice fork
+        self.levels = levels  # branch-and-bound levels of each fork's matcher
         self.open: list[Fork] = []
+        self.chosen_loops: dict[int, float] = {}  # per fork: the chosen branch's best loop score since it
+        self.rival_loops: dict[tuple, LoopClosure] = {}  # per rival branch: its best loop since the fork
 
     @classmethod
     def from_config(cls, cfg) -> "Forks":
-        return cls(cfg.loop_closure, np.radians(cfg.front_end.distinct_deg))
+        return cls(cfg.loop_closure, np.radians(cfg.front_end.distinct_deg), cfg.grid.branch_levels)
 
     def remember(self, k: int, step: Step, estimates: dict[int, np.ndarray], loop_closer: LoopCloser) -> None:
         """Scan k's turned rivals, if any (once pose k − 1 and k are in ``estimates``), with the map before
@@ -102,7 +117,7 @@ class Forks:
             return
         self.open = self.open[len(self.open) + 1 - self.cfg.fork_limit:]  # the latest fork_limit − 1
         self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned]),
-                              loop_closer.whole_map(keys, estimates)[0]))
+                              loop_closer.whole_map(keys, estimates)[0], tuple(keys), self.levels))
 
     @staticmethod
     def _on_free(fork: Fork, k: int, estimates: dict[int, np.ndarray], loop_closer: LoopCloser,
@@ -133,40 +148,51 @@ class Forks:
         return chosen > 0 and float(binom.sf(chosen - 1, chosen + rival, 0.5)) <= self.cfg.fork_significance
 
     def hypotheses(self, k: int, estimates: dict[int, np.ndarray]):
-        """(fork, switches, jump) for every rival branch to test at scan k: each open fork's rivals, and
-        each pair of forks' rivals together (a second ambiguous turn inside the first's memory: in the
-        first's rival branch the second choice may be wrong too). ``jump`` carries scan k's pose; the
-        switches are latest first."""
+        """(name, fork, switches, jump) for every rival branch to test at scan k: each open fork's rivals,
+        and each pair of forks' rivals together (a second ambiguous turn inside the first's memory: in the
+        first's rival branch the second choice may be wrong too). ``name`` names the branch across scans,
+        ``jump`` carries scan k's pose; the switches are latest first."""
         forks = [f for f in self.open if f.key < k]
         for fork in forks:
-            for jump in fork.jumps(estimates):
-                yield fork, [(fork.key, jump)], jump
+            for i, jump in enumerate(fork.jumps(estimates)):
+                yield (fork.key, i), fork, [(fork.key, jump)], jump
         for i, first in enumerate(forks):
             for second in forks[i + 1:]:
-                for jump_a in first.jumps(estimates):
-                    for jump_b in second.jumps(estimates):
-                        yield first, [(second.key, jump_b), (first.key, jump_a)], compose(jump_a, jump_b)
+                for a, jump_a in enumerate(first.jumps(estimates)):
+                    for b, jump_b in enumerate(second.jumps(estimates)):
+                        yield (first.key, a, second.key, b), first, [(second.key, jump_b), (first.key, jump_a)], \
+                            compose(jump_a, jump_b)
 
-    def observe(self, k: int, status: ScanStatus, loops: list[LoopClosure], estimates: dict[int, np.ndarray],
-                loop_closer: LoopCloser, version: int,
-                drift: Callable[[int, int, float], np.ndarray]) -> Decision | None:
-        """Scan k, its own loops ``loops``; the decision of a fork (or two) for its rival, else None."""
+    def observe(self, k: int, status: ScanStatus, estimates: dict[int, np.ndarray],
+                loop_closer: LoopCloser) -> Decision | None:
+        """Scan k; the decision of a fork (or two) for its rival, else None. Each branch's best match with
+        the map from before the fork is remembered from scan to scan: a rival branch walking back into that
+        map matches it at once, while the chosen branch's walls on its free space pile up only over the
+        scans after."""
         if status not in (ScanStatus.MATCHED, ScanStatus.AMBIGUOUS):
             return None
+        open_keys = {f.key for f in self.open}
+        self.chosen_loops = {key: s for key, s in self.chosen_loops.items() if key in open_keys}
+        self.rival_loops = {name: lc for name, lc in self.rival_loops.items() if name[0] in open_keys}
         chosen_on_free: dict[int, tuple[int, int]] = {}  # per fork: the chosen branch's (on free space, points)
-        for fork, switches, jump in self.hypotheses(k, estimates):
+        for name, fork, switches, jump in self.hypotheses(k, estimates):
+            keys = list(fork.keys)
             if fork.key not in chosen_on_free:
                 chosen_on_free[fork.key] = self._on_free(fork, k, estimates, loop_closer)
+                chosen = loop_closer.matched_in(fork.matcher, k, estimates[k], keys, estimates)
+                self.chosen_loops[fork.key] = max(self.chosen_loops.get(fork.key, 0.0),
+                                                  0.0 if chosen is None else chosen.score)
+            found = loop_closer.matched_in(fork.matcher, k, compose(jump, estimates[k]), keys, estimates)
+            if found is not None and found.weight >= self.cfg.fork_weight and \
+                    (name not in self.rival_loops or found.score > self.rival_loops[name].score):
+                self.rival_loops[name] = found
+            best = self.rival_loops.get(name)
+            if best is None or best.score <= (1.0 + self.cfg.fork_gain) * self.chosen_loops[fork.key]:
+                continue
             on_free, points = chosen_on_free[fork.key]
             if not self._contradicted(on_free, points) or \
                     not self._contradicted_more(on_free, self._on_free(fork, k, estimates, loop_closer, jump)[0]):
                 continue  # the chosen branch disagrees with the map from before the fork no more than the rival
-            chosen = max((lc.score for lc in loops if lc.anchor < fork.key), default=0.0)
-            found = loop_closer.close(k, estimates, version, drift, pose=compose(jump, estimates[k]), before=fork.key)
-            best = max(found, key=lambda lc: lc.score * lc.weight, default=None)
-            if best is None or best.weight < self.cfg.fork_weight or \
-                    best.score <= (1.0 + self.cfg.fork_gain) * chosen:
-                continue
             self.open = [f for f in self.open if f.key < fork.key]
             return Decision(switches, best)
         return None

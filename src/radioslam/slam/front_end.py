@@ -171,6 +171,13 @@ class FrontEnd:
             cov = cov + spread.T @ spread / len(undecided)
         if weight < 1.0:
             pose, cov = fuse(pose, cov, weight, primary, self.predicted)
+            if abs(wrap_angle(primary[2] - pose[2])) >= np.radians(cfg.distinct_deg):
+                # a weak match turned from the motion's prediction: the prediction stays a rival
+                rivals = np.vstack([rivals, primary])
+                status = ScanStatus.AMBIGUOUS
+                note = "; ".join(filter(None, [note, f"weak match (score {score:.2f}) turned "
+                                                     f"{np.degrees(wrap_angle(pose[2] - primary[2])):.0f}° from the "
+                                                     "motion's prediction, which stays a rival"]))
         return Step(pose, cov, status, score, rivals, note, contradicted)
 
     def _contenders(self, candidates: np.ndarray, scores: np.ndarray, adjusted: np.ndarray) -> np.ndarray:

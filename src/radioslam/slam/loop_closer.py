@@ -27,7 +27,7 @@ the ambiguity margin places the scan again.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -107,17 +107,13 @@ class LoopCloser:
         return self.matchers[submap.anchor][1]
 
     def close(self, k: int, estimates: dict[int, np.ndarray], version: int,
-              drift: Callable[[int, int, float], np.ndarray], pose: np.ndarray | None = None,
-              before: int | None = None) -> list[LoopClosure]:
-        """Verified loop closures of scan k against older submaps near its pose (or near ``pose``
-        instead, and only submaps of scans before ``before``); ``drift(anchor, k, distance)`` is the
-        covariance the odometry accumulated between the two poses."""
-        current = estimates[k] if pose is None else pose
+              drift: Callable[[int, int, float], np.ndarray]) -> list[LoopClosure]:
+        """Verified loop closures of scan k against older submaps near its pose; ``drift(anchor, k,
+        distance)`` is the covariance the odometry accumulated between the two poses."""
+        current = estimates[k]
         margin = max(2 * self.front_cfg.window_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
         found = []
         for s in self.submaps[:max(0, len(self.submaps) - 1 - self.cfg.skip_submaps)]:
-            if before is not None and s.keys[-1] >= before:
-                continue
             members = np.array([estimates[m][:2] for m in s.keys])
             if np.min(np.linalg.norm(members - current[:2], axis=1)) > self.cfg.radius_m:
                 continue
@@ -149,6 +145,24 @@ class LoopCloser:
         if self.degeneracy.matched_weak(grid, pose, points.xy, points.normals, local.covariance) is not None:
             return None
         return LoopClosure(anchor, key, pose, (local.covariance + self.floor) / weight, local.score, weight)
+
+    def matched_in(self, matcher: BranchAndBound, k: int, pose: np.ndarray, keys: list[int],
+                   estimates: dict[int, np.ndarray]) -> LoopClosure | None:
+        """Scan k matched against a whole map (``matcher`` over the world-frame grid of the scans
+        ``keys``) within the loop window of ``pose``: a loop tied to the map scan nearest the place,
+        weighted by its score alone (no chain to gate it against), or None (weak, degenerate)."""
+        c, points = self.cfg, self.points[k]
+        found = matcher.match(points.xy, points.normals, pose, c.window_m, np.radians(c.window_deg),
+                              np.radians(self.front_cfg.angle_step_deg), c.min_score)
+        if found.pose is None:
+            return None
+        local, fitted = self._local_fit(matcher.grid, points, found.pose)
+        weight = smooth_step((local.score - c.min_score) / c.score_ramp)
+        if weight <= 0.0 or self.degeneracy.matched_weak(matcher.grid, fitted, points.xy, points.normals,
+                                                         local.covariance) is not None:
+            return None
+        loop = self.placed(k, fitted, local.score, (local.covariance + self.floor) / weight, keys, estimates)
+        return replace(loop, weight=weight, relocalization=False)
 
     def _local_fit(self, grid: LikelihoodGrid, points: ScanPoints, start: np.ndarray):
         f, step = self.front_cfg, np.radians(self.front_cfg.angle_step_deg)
