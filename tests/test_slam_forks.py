@@ -225,3 +225,24 @@ def test_a_rival_loop_closed_before_the_chosen_branch_is_contradicted_is_remembe
     forks.open = []
     assert forks.observe(6, ScanStatus.MATCHED, estimates, closer) is None
     assert not forks.rival_loops and not forks.chosen_loops
+
+
+def test_a_weak_match_turned_from_the_prediction_keeps_it_as_a_rival_for_the_map_to_decide():
+    """polygon-fixed-2038 (the terminal never turns): scan 12 sees little (59 points) and its best
+    match, weak (score 0.26), is turned by −41°; the true step scores lower. Fused as a weak match, the
+    turn stood and every later scan followed it (1.72 m over 40 poses, tracking_lost false). The
+    motion's prediction stays a rival: the scan is ambiguous, and once the turned branch's walls land
+    where the map from before saw through while the prediction's branch matches that map, the rival
+    is taken and no heading is off by more than a degree or two."""
+    from test_slam_motion import sensed
+
+    from radioslam.eval.trajectory_metrics import ate_rmse
+    from radioslam.scene.procedural import MotionKind, RoomKind, generate_case
+
+    case = generate_case(RoomKind.POLYGON, MotionKind.FIXED, 2038, max_poses=27)
+    result = RadioSlam().run(sensed(case.scene, case.seed))
+    assert result.status[12] is ScanStatus.AMBIGUOUS
+    assert any(w.startswith("scan 12:") and "motion's prediction" in w and "rival taken" in w
+               for w in result.warnings)
+    assert np.degrees(np.abs(wrap_angle(result.poses[:, 2] - result.poses[0, 2]))).max() < 3.0
+    assert ate_rmse(result.poses, case.scene.poses) <= 0.35
