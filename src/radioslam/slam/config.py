@@ -161,9 +161,9 @@ class LoopClosureConfig(_Section):
     # its own score in place: the room looks the same from both places (a symmetric room)
     self_similar: float = Field(0.1, ge=0, le=1)
     # an ambiguous scan with rivals turned from the choice is a fork (:mod:`radioslam.slam.forks`; the
-    # latest fork_limit, each for fork_memory scans): a later scan carried to a rival's branch that closes a
-    # loop of weight ≥ fork_weight with the submaps from before the fork, scoring fork_gain better than any
-    # the chosen branch closed with them, takes the rival
+    # latest fork_limit, each for fork_memory scans): a rival's branch whose best match since the fork with
+    # the map from before it has weight ≥ fork_weight and scores fork_gain better than the chosen branch's
+    # best match there takes the rival
     fork_memory: int = Field(15, ge=1)
     fork_limit: int = Field(3, ge=0)
     fork_weight: float = Field(0.5, gt=0, le=1)
@@ -214,7 +214,7 @@ class PlaneAdjustmentConfig(_Section):
     # 0.24 -> 0.04 m; but shelf-hall's aisle legs, where a shelf's double bounce passes for the outer
     # wall, slide 0.08 -> 0.12 m: see docs/notes.md, session 9), and the pose graph's steps at the front
     # end's step covariance times step_inflation² (the scans' information is in both: not counted twice)
-    anchors: Anchors = Anchors.FIXED
+    anchors: Anchors = Anchors.MARGINAL
     anchor_sigma_m: float = Field(0.05, gt=0)
     anchor_sigma_deg: float = Field(0.5, gt=0)
     step_inflation: float = Field(3.0, gt=0)
