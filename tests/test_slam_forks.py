@@ -101,7 +101,7 @@ def test_a_branch_is_contradicted_by_walls_where_the_map_before_the_fork_saw_thr
     seen_through = np.column_stack([np.linspace(0.0, 4.5, 91), np.zeros(91)])  # the line to the wall's foot
     grid = LikelihoodGrid.from_points(wall, 0.05, 0.05, 5.5, np.full(41, np.pi), np.radians(1.0), 1.5,
                                       seen_through, 1.0)
-    fork = Fork(1, np.zeros((1, 3)), grid)
+    fork = Fork(1, np.zeros((1, 3)), grid, (0,), 4)
     across = np.column_stack([np.full(20, 2.0), np.linspace(-0.5, 0.5, 20)])  # a wall across the line
     forks = Forks.from_config(SlamConfig())
     closer = SimpleNamespace(points={1: SimpleNamespace(xy=across, normals=np.full(20, np.nan))})
@@ -189,7 +189,7 @@ def test_two_open_forks_are_also_tested_together_latest_switch_first():
     estimates = {k: p for k, p in enumerate(poses)}
     turn = np.array([[0.0, 0.0, np.pi]])  # each rival: turned on the spot instead of walking on
     forks = Forks.from_config(SlamConfig())
-    forks.open = [Fork(2, turn, None), Fork(5, turn, None)]  # no map needed to name the branches
+    forks.open = [Fork(2, turn, None, (0, 1), 4), Fork(5, turn, None, (0, 1, 2, 3, 4), 4)]  # no map: names only
     found = list(forks.hypotheses(7, estimates))
     assert [[key for key, _ in switches] for _, _, switches, _ in found] == [[2], [5], [5, 2]]
     assert len({name for name, _, _, _ in found}) == 3  # each branch named apart, across scans

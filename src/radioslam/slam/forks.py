@@ -66,8 +66,8 @@ class Fork:
     key: int
     rivals: np.ndarray  # (R, 3) each rival's pose in the frame of pose key − 1
     grid: LikelihoodGrid  # the map of the scans before it
-    keys: tuple[int, ...] = ()  # those scans
-    levels: int = 5  # the branch-and-bound levels of its matcher
+    keys: tuple[int, ...]  # those scans
+    levels: int  # the branch-and-bound levels of its matcher
 
     @cached_property
     def matcher(self) -> BranchAndBound:
