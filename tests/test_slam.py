@@ -11,7 +11,7 @@ from radioslam.slam import RadioSlam, ScanStatus, SlamConfig
 from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.correlative import candidate_likelihoods, correlative_match
 from radioslam.slam.grid import LikelihoodGrid
-from radioslam.slam.normals import oblique_walls, specular_normals
+from radioslam.slam.normals import oblique_walls, specular_arcs, specular_normals
 from radioslam.slam.refine import refine_pose
 from radioslam.slam.se2 import between, compose, inverse, transform_points
 
@@ -145,6 +145,43 @@ def test_specular_normal_is_the_vertex_of_the_arc_power(normal_deg, rng):
 def test_points_of_a_run_without_interior_peak_have_no_normal(rng):
     scan = arc_scan(20.0, rng)  # the peak lies beyond the last beam
     assert np.isnan(specular_normals(scan, SlamConfig().scan.arc_range_m)).all()
+
+
+def seam_scan(normal_deg: float) -> Scan:
+    """A wall near 45°, between orientation 0's sector (beams to 46°) and orientation 1's (from 44°):
+    the last beams of each, at one range, the power a parabola in bearing around the normal."""
+    beams = np.arange(14, 24)
+    angle = np.concatenate([np.arcsin(2 * beams / 64), np.pi / 2 - np.arcsin(2 * beams / 64)])
+    power = -0.5 * ((np.degrees(angle) - normal_deg) / 2.0) ** 2
+    return Scan(np.full(2 * len(beams), 4.0), angle, power - power.max(), np.concatenate([beams, -beams]),
+                np.repeat([0, 1], len(beams)))
+
+
+@pytest.mark.parametrize("normal_deg", [44.8, 45.0, 45.2])
+def test_a_wall_between_two_sectors_takes_the_normal_of_both_arcs_together(normal_deg):
+    """Each orientation's arc peaks on its last beam (no interior peak: no normal before, so a terminal
+    held at 45° to a room had no normal on any wall and stood still while walking, rectangle-fixed-4031
+    2.1 m); fitted together, the two arcs give the normal and one sighting of the wall."""
+    normals, sightings = specular_arcs(seam_scan(normal_deg), SlamConfig().scan.arc_range_m)
+    assert np.allclose(np.degrees(normals), normal_deg, atol=1e-6)  # a parabola in dB is fitted exactly
+    assert len(sightings) == 1 and np.isclose(np.degrees(sightings[0, 0]), normal_deg, atol=1e-6)
+
+
+def test_only_two_edge_arcs_are_fitted_together():
+    """The normal at 41° peaks inside orientation 0's sector: that arc is fitted alone, and orientation
+    1's arc of the wall, peaking on its edge (44°), keeps no normal (taking the interior arc's was
+    tried: such an arc is often another surface's). Two edge arcs at different ranges, or farther than
+    ``seam_gap_deg`` apart, are two surfaces: no normal."""
+    arc_range = SlamConfig().scan.arc_range_m
+    scan = seam_scan(41.0)
+    normals, sightings = specular_arcs(scan, arc_range)
+    assert np.allclose(np.degrees(normals[scan.orientation == 0]), 41.0, atol=1e-6) and len(sightings) == 1
+    assert np.isnan(normals[scan.orientation == 1]).all()
+    scan = seam_scan(45.0)
+    apart = Scan(np.where(scan.orientation == 1, 5.0, 4.0), scan.angle_rad, scan.power_db, scan.beam,
+                 scan.orientation)
+    assert np.isnan(specular_arcs(apart, arc_range)[0]).all()
+    assert np.isnan(specular_arcs(scan, arc_range, np.radians(1.0))[0]).all()  # peaks 2° apart
 
 
 def synthetic_scans(poses, walls_pts, walls_nrm, rng, max_range=6.0):

@@ -44,6 +44,9 @@ class ScanConfig(_Section):
 
     min_points: int = Field(8, ge=3)  # a scan with fewer points is skipped with a warning
     arc_range_m: float = Field(0.10, gt=0)  # consecutive beams within this range form one arc
+    # an arc peaking on its sector's edge joins the adjacent orientation's arc at its range whose peak
+    # lies within this bearing (a wall between two sectors)
+    seam_gap_deg: float = Field(8.0, gt=0)
     project_arcs: bool = False  # arc points placed where their beam meets the arc's wall line (tried: worse)
     # degeneracy (Zhang et al. 2016): line fits through neighbours within this radius where no
     # specular normal is known; a point within this many σ of the map agrees with it

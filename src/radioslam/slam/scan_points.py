@@ -29,7 +29,7 @@ class ScanPoints:
 def prepare_points(scan: Scan, cfg: ScanConfig, grid: GridConfig) -> ScanPoints:
     """The scan's points with their specular normals, its free-space samples (half a cell apart) and
     the sightings of the walls its specular arcs face."""
-    phi, sightings = specular_arcs(scan, cfg.arc_range_m)
+    phi, sightings = specular_arcs(scan, cfg.arc_range_m, np.radians(cfg.seam_gap_deg))
     xy = wall_points(scan, phi) if cfg.project_arcs else scan.xy
     return ScanPoints(xy, phi, free_samples(xy, phi, grid.free_stop_m, grid.free_pose_radius_m,
                                             grid.resolution_m / 2), sightings)
