@@ -127,6 +127,9 @@ def test_seeds_only_speed_branch_and_bound_up(rng):
     assert right.evaluated < plain.evaluated
 
 
+ARCS = (SlamConfig().scan.arc_range_m, np.radians(SlamConfig().scan.seam_gap_deg))  # arc range, seam gap
+
+
 def arc_scan(normal_deg: float, rng) -> Scan:
     """A wall seen as an arc: beams of orientation 0 at one range, power peaking on the normal."""
     beams = np.arange(-6, 7)
@@ -138,13 +141,13 @@ def arc_scan(normal_deg: float, rng) -> Scan:
 
 @pytest.mark.parametrize("normal_deg", [-2.3, 0.0, 0.7, 3.1])
 def test_specular_normal_is_the_vertex_of_the_arc_power(normal_deg, rng):
-    normals = specular_normals(arc_scan(normal_deg, rng), SlamConfig().scan.arc_range_m)
+    normals = specular_normals(arc_scan(normal_deg, rng), *ARCS)
     assert np.allclose(np.degrees(normals), normal_deg, atol=1e-6)  # a parabola in dB is fitted exactly
 
 
 def test_points_of_a_run_without_interior_peak_have_no_normal(rng):
     scan = arc_scan(20.0, rng)  # the peak lies beyond the last beam
-    assert np.isnan(specular_normals(scan, SlamConfig().scan.arc_range_m)).all()
+    assert np.isnan(specular_normals(scan, *ARCS)).all()
 
 
 def seam_scan(normal_deg: float) -> Scan:
@@ -162,7 +165,7 @@ def test_a_wall_between_two_sectors_takes_the_normal_of_both_arcs_together(norma
     """Each orientation's arc peaks on its last beam (no interior peak: no normal before, so a terminal
     held at 45° to a room had no normal on any wall and stood still while walking, rectangle-fixed-4031
     2.1 m); fitted together, the two arcs give the normal and one sighting of the wall."""
-    normals, sightings = specular_arcs(seam_scan(normal_deg), SlamConfig().scan.arc_range_m)
+    normals, sightings = specular_arcs(seam_scan(normal_deg), *ARCS)
     assert np.allclose(np.degrees(normals), normal_deg, atol=1e-6)  # a parabola in dB is fitted exactly
     assert len(sightings) == 1 and np.isclose(np.degrees(sightings[0, 0]), normal_deg, atol=1e-6)
 
@@ -172,15 +175,15 @@ def test_only_two_edge_arcs_are_fitted_together():
     1's arc of the wall, peaking on its edge (44°), keeps no normal (taking the interior arc's was
     tried: such an arc is often another surface's). Two edge arcs at different ranges, or farther than
     ``seam_gap_deg`` apart, are two surfaces: no normal."""
-    arc_range = SlamConfig().scan.arc_range_m
+    arc_range = ARCS[0]
     scan = seam_scan(41.0)
-    normals, sightings = specular_arcs(scan, arc_range)
+    normals, sightings = specular_arcs(scan, *ARCS)
     assert np.allclose(np.degrees(normals[scan.orientation == 0]), 41.0, atol=1e-6) and len(sightings) == 1
     assert np.isnan(normals[scan.orientation == 1]).all()
     scan = seam_scan(45.0)
     apart = Scan(np.where(scan.orientation == 1, 5.0, 4.0), scan.angle_rad, scan.power_db, scan.beam,
                  scan.orientation)
-    assert np.isnan(specular_arcs(apart, arc_range)[0]).all()
+    assert np.isnan(specular_arcs(apart, *ARCS)[0]).all()
     assert np.isnan(specular_arcs(scan, arc_range, np.radians(1.0))[0]).all()  # peaks 2° apart
 
 

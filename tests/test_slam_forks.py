@@ -224,7 +224,7 @@ def test_a_rival_loop_closed_before_the_chosen_branch_is_contradicted_is_remembe
     # forgotten with the fork: a new fork at another scan starts with nothing remembered
     forks.open = []
     assert forks.observe(6, ScanStatus.MATCHED, estimates, closer) is None
-    assert not forks.rival_loops and not forks.chosen_loops
+    assert not forks.rival_loops and not forks.chosen_scores
 
 
 def test_a_weak_match_turned_from_the_prediction_keeps_it_as_a_rival_for_the_map_to_decide():

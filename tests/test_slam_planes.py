@@ -126,7 +126,7 @@ def test_an_arc_sights_its_wall_at_the_normal_and_the_foot_range():
     angle = np.arcsin(2 * beams / 64)
     power = -0.5 * ((np.degrees(angle) - 1.2) / 2.0) ** 2
     scan = Scan(np.full(len(beams), 4.0), angle, power - power.max(), beams, np.zeros(len(beams), np.int64))
-    normals, sightings = specular_arcs(scan, SlamConfig().scan.arc_range_m)
+    normals, sightings = specular_arcs(scan, SlamConfig().scan.arc_range_m, np.radians(SlamConfig().scan.seam_gap_deg))
     assert sightings.shape == (1, 2)
     assert np.degrees(sightings[0, 0]) == pytest.approx(1.2, abs=1e-6) and sightings[0, 1] == 4.0
     assert np.allclose(normals, sightings[0, 0])

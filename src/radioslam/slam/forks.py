@@ -98,7 +98,7 @@ class Forks:
         self.cfg, self.turn_rad = cfg, turn_rad  # rivals turned at least this much from the choice fork
         self.levels = levels  # branch-and-bound levels of each fork's matcher
         self.open: list[Fork] = []
-        self.chosen_loops: dict[int, float] = {}  # per fork: the chosen branch's best loop score since it
+        self.chosen_scores: dict[int, float] = {}  # per fork: the chosen branch's best match score since it
         self.rival_loops: dict[tuple, LoopClosure] = {}  # per rival branch: its best loop since the fork
 
     @classmethod
@@ -172,22 +172,21 @@ class Forks:
         if status not in (ScanStatus.MATCHED, ScanStatus.AMBIGUOUS):
             return None
         open_keys = {f.key for f in self.open}
-        self.chosen_loops = {key: s for key, s in self.chosen_loops.items() if key in open_keys}
+        self.chosen_scores = {key: s for key, s in self.chosen_scores.items() if key in open_keys}
         self.rival_loops = {name: lc for name, lc in self.rival_loops.items() if name[0] in open_keys}
         chosen_on_free: dict[int, tuple[int, int]] = {}  # per fork: the chosen branch's (on free space, points)
         for name, fork, switches, jump in self.hypotheses(k, estimates):
-            keys = list(fork.keys)
             if fork.key not in chosen_on_free:
                 chosen_on_free[fork.key] = self._on_free(fork, k, estimates, loop_closer)
-                chosen = loop_closer.matched_in(fork.matcher, k, estimates[k], keys, estimates)
-                self.chosen_loops[fork.key] = max(self.chosen_loops.get(fork.key, 0.0),
+                chosen = loop_closer.matched_in(fork.matcher, k, estimates[k], fork.keys, estimates)
+                self.chosen_scores[fork.key] = max(self.chosen_scores.get(fork.key, 0.0),
                                                   0.0 if chosen is None else chosen.score)
-            found = loop_closer.matched_in(fork.matcher, k, compose(jump, estimates[k]), keys, estimates)
+            found = loop_closer.matched_in(fork.matcher, k, compose(jump, estimates[k]), fork.keys, estimates)
             if found is not None and found.weight >= self.cfg.fork_weight and \
                     (name not in self.rival_loops or found.score > self.rival_loops[name].score):
                 self.rival_loops[name] = found
             best = self.rival_loops.get(name)
-            if best is None or best.score <= (1.0 + self.cfg.fork_gain) * self.chosen_loops[fork.key]:
+            if best is None or best.score <= (1.0 + self.cfg.fork_gain) * self.chosen_scores[fork.key]:
                 continue
             on_free, points = chosen_on_free[fork.key]
             if not self._contradicted(on_free, points) or \

@@ -128,41 +128,46 @@ class LoopCloser:
     def _match(self, matcher: BranchAndBound, points: ScanPoints, predicted: np.ndarray, drift: np.ndarray,
                anchor: int, key: int) -> LoopClosure | None:
         """A verified, weighted loop closure of the scan against a submap's matcher (anchor frame)."""
-        c, step = self.cfg, np.radians(self.front_cfg.angle_step_deg)
-        grid = matcher.grid
-        found = matcher.match(points.xy, points.normals, predicted, c.window_m, np.radians(c.window_deg), step,
-                              c.min_score)
-        if found.pose is None:
+        fit = self._window_fit(matcher, points, predicted)
+        if fit is None:
             return None
-        # the response surface around the winner gives the covariance (Olson 2009 §IV)
-        local, pose = self._local_fit(grid, points, found.pose)
-        score_weight = smooth_step((local.score - c.min_score) / c.score_ramp)
+        local, pose, score_weight = fit
         chi2 = mahalanobis2(pose, predicted, drift + local.covariance + self.floor)
-        weight = score_weight * smooth_step(2.0 * (c.gate_chi2 - chi2) / c.gate_chi2)
-        if weight <= 0.0:
-            return None
-        # the points that agree with the submap must fix every direction (Zhang et al. 2016)
-        if self.degeneracy.matched_weak(grid, pose, points.xy, points.normals, local.covariance) is not None:
+        weight = score_weight * smooth_step(2.0 * (self.cfg.gate_chi2 - chi2) / self.cfg.gate_chi2)
+        if weight <= 0.0 or self._degenerate(matcher.grid, points, pose, local.covariance):
             return None
         return LoopClosure(anchor, key, pose, (local.covariance + self.floor) / weight, local.score, weight)
 
-    def matched_in(self, matcher: BranchAndBound, k: int, pose: np.ndarray, keys: list[int],
+    def matched_in(self, matcher: BranchAndBound, k: int, pose: np.ndarray, keys: list[int] | tuple[int, ...],
                    estimates: dict[int, np.ndarray]) -> LoopClosure | None:
         """Scan k matched against a whole map (``matcher`` over the world-frame grid of the scans
         ``keys``) within the loop window of ``pose``: a loop tied to the map scan nearest the place,
         weighted by its score alone (no chain to gate it against), or None (weak, degenerate)."""
-        c, points = self.cfg, self.points[k]
-        found = matcher.match(points.xy, points.normals, pose, c.window_m, np.radians(c.window_deg),
-                              np.radians(self.front_cfg.angle_step_deg), c.min_score)
-        if found.pose is None:
+        points = self.points[k]
+        fit = self._window_fit(matcher, points, pose)
+        if fit is None:
             return None
-        local, fitted = self._local_fit(matcher.grid, points, found.pose)
-        weight = smooth_step((local.score - c.min_score) / c.score_ramp)
-        if weight <= 0.0 or self.degeneracy.matched_weak(matcher.grid, fitted, points.xy, points.normals,
-                                                         local.covariance) is not None:
+        local, fitted, weight = fit
+        if weight <= 0.0 or self._degenerate(matcher.grid, points, fitted, local.covariance):
             return None
         loop = self.placed(k, fitted, local.score, (local.covariance + self.floor) / weight, keys, estimates)
         return replace(loop, weight=weight, relocalization=False)
+
+    def _window_fit(self, matcher: BranchAndBound, points: ScanPoints, around: np.ndarray):
+        """The scan's best pose within the loop window of ``around`` (None: nothing scores ``min_score``),
+        refined, with the response surface around it (its covariance, Olson 2009 §IV) and its score's
+        weight: 0 at ``min_score``, 1 from ``min_score + score_ramp`` on."""
+        c = self.cfg
+        found = matcher.match(points.xy, points.normals, around, c.window_m, np.radians(c.window_deg),
+                              np.radians(self.front_cfg.angle_step_deg), c.min_score)
+        if found.pose is None:
+            return None
+        local, pose = self._local_fit(matcher.grid, points, found.pose)
+        return local, pose, smooth_step((local.score - c.min_score) / c.score_ramp)
+
+    def _degenerate(self, grid: LikelihoodGrid, points: ScanPoints, pose: np.ndarray, covariance: np.ndarray) -> bool:
+        """Whether the points that agree with the map leave a direction unfixed (Zhang et al. 2016)."""
+        return self.degeneracy.matched_weak(grid, pose, points.xy, points.normals, covariance) is not None
 
     def _local_fit(self, grid: LikelihoodGrid, points: ScanPoints, start: np.ndarray):
         f, step = self.front_cfg, np.radians(self.front_cfg.angle_step_deg)
@@ -251,7 +256,7 @@ class LoopCloser:
         return compose(estimates[loop.anchor], loop.relative)
 
     @staticmethod
-    def placed(k: int, pose: np.ndarray, score: float, covariance: np.ndarray, keys: list[int],
+    def placed(k: int, pose: np.ndarray, score: float, covariance: np.ndarray, keys: list[int] | tuple[int, ...],
                estimates: dict[int, np.ndarray]) -> LoopClosure:
         """The relocalization of scan k at world ``pose``: tied to the map scan nearest it."""
         anchor = keys[int(np.argmin([np.linalg.norm(estimates[m][:2] - pose[:2]) for m in keys]))]

@@ -21,13 +21,12 @@ from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.se2 import wrap_angle
 
 
-def specular_normals(scan: Scan, arc_range_m: float, seam_gap_rad: float = np.radians(8.0)) -> np.ndarray:
+def specular_normals(scan: Scan, arc_range_m: float, seam_gap_rad: float) -> np.ndarray:
     """Terminal-frame bearing (P,) of the surface normal each point's echo came from; NaN: unknown."""
     return specular_arcs(scan, arc_range_m, seam_gap_rad)[0]
 
 
-def specular_arcs(scan: Scan, arc_range_m: float,
-                  seam_gap_rad: float = np.radians(8.0)) -> tuple[np.ndarray, np.ndarray]:
+def specular_arcs(scan: Scan, arc_range_m: float, seam_gap_rad: float) -> tuple[np.ndarray, np.ndarray]:
     """The normals of :func:`specular_normals` (P,), and each specular arc's sighting of its
     surface (A, 2): the normal's terminal-frame bearing φ and the range of the arc's strongest
     point, the specular foot's distance (the surface is the line n(φ)·x = r in the terminal
