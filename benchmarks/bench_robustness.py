@@ -31,7 +31,7 @@ from bench_stability import perturbed
 from radioslam.eval.trajectory_metrics import ate_rmse
 from radioslam.scene import Scene, scene_to_yaml
 from radioslam.scene.procedural import Case, robustness_suite
-from radioslam.sensing import Receiver
+from radioslam.sensing import Receiver, SensingConfig
 from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import Simulator
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, load_slam_config
@@ -41,7 +41,9 @@ SUCCESS_M, LOST_M = 0.2, 1.0
 
 
 def cache_file(scene: Scene, seed: int, cache: Path) -> Path:
-    key = hashlib.sha1(scene_to_yaml(scene).encode() + str(seed).encode()).hexdigest()[:16]
+    # the receiver's settings too: scans sensed with another refinement, say, are not these
+    receiver = SensingConfig().model_dump_json()
+    key = hashlib.sha1(scene_to_yaml(scene).encode() + str(seed).encode() + receiver.encode()).hexdigest()[:16]
     return cache / f"{scene.name}-{key}.npz"
 
 

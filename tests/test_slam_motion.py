@@ -15,8 +15,8 @@ from radioslam.sim import Simulator
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig
 
 
-def sensed(scene, seed):
-    receiver = Receiver(scene.radio, scene.radio.hardware_delay_s)
+def sensed(scene, seed, cfg=None):
+    receiver = Receiver(scene.radio, scene.radio.hardware_delay_s, cfg)
     return [receiver.sense(c).scan for c in Simulator.from_scene(scene).simulate(seed)]
 
 

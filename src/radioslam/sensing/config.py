@@ -35,6 +35,13 @@ class PointFilter(str, Enum):
     SAME_RANGE = "same-range"
 
 
+class Refinement(str, Enum):
+    """How an integer range-profile peak is refined to a fractional lag (T2)."""
+
+    BRACKETED = "bracketed"  # both sides bracketed on a quarter-sample grid, golden section per lobe
+    PAPER_BISECTION = "paper-bisection"  # the paper's fractional-IFFT bisection (§III-A), to reproduce it
+
+
 class SensingConfig(BaseModel):
     """Every receiver parameter. Defaults follow the paper; ranges in metres."""
 
@@ -42,8 +49,9 @@ class SensingConfig(BaseModel):
 
     detector: Detector = Detector.SINGLE
     peaks: int = Field(3, ge=1, le=16)  # K̂, the IFFT peaks refined per beam (§III-A)
-    precision_m: float = Field(0.001, gt=0)  # bisection stops at this range precision
-    max_iterations: int = Field(20, ge=0, le=40)
+    refine: Refinement = Refinement.BRACKETED
+    precision_m: float = Field(0.001, gt=0)  # refinement stops at this range precision
+    max_iterations: int = Field(20, ge=0, le=40)  # refinement steps at most
     decimation: int = Field(4, ge=1, le=16)  # PSS synchronization rate f_s/4 (§III-C)
     min_range_m: float = Field(1.5, ge=0)  # gate: the TX→RX leakage is never a target
     max_range_m: float | None = Field(None, gt=0)  # None: the radio's max_range_m

@@ -6,7 +6,7 @@
   array baseline b/c); its amplitude is estimated there and subtracted before the
   search, so its range sidelobes are not reported either.
 * Single (the paper's): the K̂ largest local maxima in the gate that clear the noise
-  floor are refined by bisection; the strongest is the beam's target.
+  floor are refined (T2, :mod:`radioslam.sensing.refiner`); the strongest is the beam's target.
 * Multi: CFAR on the residual profile, then successive cancellation: the strongest
   detection is refined, subtracted, and the search repeats; after each new path
   every path found so far is re-estimated with the others cancelled (the cyclic
@@ -21,10 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from radioslam.nr.ofdm import phase_ramp
-from radioslam.sensing.bisection import bisect_peaks, neighbour_values
+from radioslam.sensing.bisection import neighbour_values
 from radioslam.sensing.cfar import cfar_threshold, noise_threshold
 from radioslam.sensing.config import SensingConfig
 from radioslam.sensing.profile import RangeSpectrum, signed_lag
+from radioslam.sensing.refiner import PeakRefiner
 
 POLISH_STEPS = 4
 NEAR_CELLS = 3.0
@@ -108,7 +109,7 @@ def _ridge(gram: np.ndarray) -> np.ndarray:
 
 
 def relax(spec: RangeSpectrum, lag: np.ndarray, amp: np.ndarray, present: np.ndarray, fixed: np.ndarray,
-          passes: int, iterations: int) -> tuple[np.ndarray, np.ndarray, int]:
+          passes: int, refiner: PeakRefiner) -> tuple[np.ndarray, np.ndarray, int]:
     """Cyclic re-estimation of paths (B, M) (RELAX): each lag with the others cancelled, then
     all amplitudes jointly by least squares. A ``fixed`` column (the leakage) keeps its lag.
     """
@@ -120,14 +121,10 @@ def relax(spec: RangeSpectrum, lag: np.ndarray, amp: np.ndarray, present: np.nda
         for j in movable:
             resid = _cancel_all_but(spec, lag, amp, j)
             here = present[:, j]
-            centre = np.round(np.nan_to_num(lag[:, j])).astype(np.int64)
-            around = resid.at((centre[:, None] + np.arange(-2, 3)).astype(np.float64))  # (B, 5)
-            best = 1 + np.argmax(np.abs(around[:, 1:4]), axis=1)  # the integer peak among the 3 central
-            values = np.stack([around[np.arange(b), best + d] for d in (-1, 0, 1)], axis=1)
-            refined = bisect_peaks(resid, (centre + best - 2)[:, None], values[:, None, :], iterations)
+            refined = refiner.track(resid, np.nan_to_num(lag[:, j]))
             lag[:, j] = np.where(here, refined.lag[:, 0], lag[:, j])
             amp = joint_amplitudes(spec, lag, present)
-            evaluations += 5 * b + refined.dft_evaluations + b * lag.shape[1]
+            evaluations += refined.dft_evaluations + b * lag.shape[1]
     return lag, amp, evaluations
 
 
@@ -169,13 +166,13 @@ def close_pairs(lag: np.ndarray, present: np.ndarray, cells: float = NEAR_CELLS)
 
 
 def refine_jointly(spec: RangeSpectrum, lag: np.ndarray, amp: np.ndarray, present: np.ndarray,
-                   fixed: np.ndarray, passes: int, iterations: int) -> tuple[np.ndarray, np.ndarray, int]:
+                   fixed: np.ndarray, passes: int, refiner: PeakRefiner) -> tuple[np.ndarray, np.ndarray, int]:
     """RELAX passes on every beam, then the joint polish where paths are within ``NEAR_CELLS``.
 
     Farther apart the cyclic estimates have converged after a pass (a path's range
     sidelobes at another are below −20 dB); closer, RELAX crawls and Gauss–Newton finishes.
     """
-    lag, amp, spent = relax(spec, lag, amp, present, fixed, passes, iterations)
+    lag, amp, spent = relax(spec, lag, amp, present, fixed, passes, refiner)
     near = close_pairs(lag, present)
     if near.any():
         lag, amp = lag.copy(), amp.copy()
@@ -197,10 +194,10 @@ def _with_leakage(spec: RangeSpectrum, gate: LagGate, slots: int):
     return lag, amp, present, fixed
 
 
-def pdp_peaks(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, iterations: int,
+def pdp_peaks(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner: PeakRefiner,
               contenders_db: float | None = None):
     """Leakage estimated and cancelled, then the K̂ largest local maxima in the gate that clear
-    the noise floor, each refined by bisection. Returns (paths, refined peaks (B, K̂), exist (B, K̂)).
+    the noise floor, each refined by ``refiner``. Returns (paths, refined peaks (B, K̂), exist (B, K̂)).
 
     With ``contenders_db``, only peaks within that many dB of the beam's strongest integer
     peak are refined (the others keep their integer lag): enough when only the strongest
@@ -217,25 +214,25 @@ def pdp_peaks(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, iterations
     if contenders_db is not None:
         peak_power = np.take_along_axis(power, peaks, axis=1)
         active = ok & (peak_power >= peak_power[:, :1] * 10 ** (-contenders_db / 10))
-    refined = bisect_peaks(resid, signed_lag(peaks, n), neighbour_values(profile, peaks), iterations, active)
+    refined = refiner.refine(resid, signed_lag(peaks, n), neighbour_values(profile, peaks), active)
     return (lag, amp, present, fixed), refined, ok
 
 
-def detect_single(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, iterations: int) -> Detections:
+def detect_single(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner: PeakRefiner) -> Detections:
     """The strongest refined peak per beam in the gate (paper §III-A), leakage cancelled jointly."""
-    (lag, amp, present, fixed), refined, ok = pdp_peaks(spec, gate, cfg, iterations, CONTENDER_DB)
+    (lag, amp, present, fixed), refined, ok = pdp_peaks(spec, gate, cfg, refiner, CONTENDER_DB)
     score = np.where(ok, np.abs(refined.amplitude), -1.0)
     best = np.argmax(score, axis=1)
     rows = np.arange(len(best))
     present[:, 1] = ok[rows, best]
     lag[:, 1] = refined.lag[rows, best]
     amp[:, 1] = np.where(present[:, 1], refined.amplitude[rows, best], 0.0)
-    lag, amp, spent = refine_jointly(spec, lag, amp, present, fixed, cfg.relax_passes, iterations)
+    lag, amp, spent = refine_jointly(spec, lag, amp, present, fixed, cfg.relax_passes, refiner)
     valid = present[:, 1:] & gate.contains(lag[:, 1:])
     return Detections(lag[:, 1:], amp[:, 1:], valid, refined.dft_evaluations + spent)
 
 
-def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, iterations: int) -> Detections:
+def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner: PeakRefiner) -> Detections:
     """CFAR + successive cancellation with RELAX re-estimation (paper §III-B)."""
     m = cfg.max_targets
     lag, amp, present, fixed = _with_leakage(spec, gate, m)
@@ -253,15 +250,21 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, iterati
         searching &= ok[:, 0]
         if not searching.any():
             break
-        refined = bisect_peaks(resid, signed_lag(peaks, n), neighbour_values(profile, peaks), iterations)
+        refined = refiner.refine(resid, signed_lag(peaks, n), neighbour_values(profile, peaks))
         present[:, slot] = searching
         lag[:, slot] = np.where(searching, refined.lag[:, 0], np.nan)
         amp[:, slot] = np.where(searching, refined.amplitude[:, 0], 0.0)
-        lag, amp, used = refine_jointly(spec, lag, amp, present, fixed, cfg.relax_passes, iterations)
+        lag, amp, used = refine_jointly(spec, lag, amp, present, fixed, cfg.relax_passes, refiner)
         spent += refined.dft_evaluations + used
-    valid = present[:, 1:] & gate.contains(np.nan_to_num(lag[:, 1:], nan=-np.inf))
-    # two paths that converged onto one another are one target: keep the stronger
+    # two paths that converged onto one another are one target: keep the stronger, and estimate the
+    # amplitudes again without the other (two paths at one lag make the least squares ill-posed: their
+    # amplitudes grow large and opposite, and the scan's peak, which every point is normalized by, with them)
     gap = np.abs(lag[:, 1:, None] - lag[:, None, 1:])
     weaker = np.abs(amp[:, 1:, None]) < np.abs(amp[:, None, 1:])
-    valid &= ~((gap < MERGE_CELLS) & weaker & valid[:, None, :]).any(axis=2)
+    twin = present[:, 1:] & ((gap < MERGE_CELLS) & weaker & present[:, None, 1:]).any(axis=2)
+    merged = np.flatnonzero(twin.any(axis=1))
+    if len(merged):
+        present[:, 1:] &= ~twin
+        amp[merged] = joint_amplitudes(spec.rows(merged), lag[merged], present[merged])
+    valid = present[:, 1:] & gate.contains(np.nan_to_num(lag[:, 1:], nan=-np.inf))
     return Detections(lag[:, 1:], amp[:, 1:], valid, spent)

@@ -63,6 +63,18 @@ class RangeSpectrum:
         """F at fractional lags (B, K): one n_sc-term DFT evaluation per entry."""
         return self._s_sum(lags) / self.scale[:, None]
 
+    @cached_property
+    def _derivative_sums(self) -> BlockedSpectrum:
+        """S, S·jω and S·(jω)² stacked (3B, n_sc), ω = 2πp/N: F and its first two lag derivatives."""
+        jw = 2j * np.pi * self.p / self.fft_size
+        return BlockedSpectrum(np.concatenate([self.s, self.s * jw, self.s * jw**2]), self.p, self.fft_size)
+
+    def with_derivatives(self, lags: np.ndarray) -> np.ndarray:
+        """F, dF/dt and d²F/dt² at fractional lags (B, K): (3, B, K), in one blocked evaluation."""
+        b = self.s.shape[0]
+        values = self._derivative_sums(np.tile(lags, (3, 1))) / np.tile(self.scale, 3)[:, None]
+        return values.reshape(3, b, -1)
+
     def kernel(self, lags: np.ndarray) -> np.ndarray:
         """Σ_p model(p)·e^{j2πpt/N} at lags (B, K): the response at lag t of a path at lag 0,
         unnormalized (the Gram entries of two paths t apart)."""

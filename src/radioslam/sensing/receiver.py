@@ -15,13 +15,13 @@ import numpy as np
 from radioslam.capture import Capture, CaptureMode
 from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
 from radioslam.nr.numerology import Numerology
-from radioslam.sensing.bisection import iterations_for
 from radioslam.sensing.config import Detector, PointFilter, SensingConfig
 from radioslam.sensing.detect import Detections, LagGate, detect_multi, detect_single
 from radioslam.sensing.errors import SensingError
 from radioslam.sensing.estimate import ChannelEstimate, estimate_channel
 from radioslam.sensing.pointcloud import Scan, build_scan
 from radioslam.sensing.profile import RangeSpectrum, mf_spectrum, pdp_spectrum, signed_lag
+from radioslam.sensing.refiner import PeakRefiner
 from radioslam.sensing.sync import coarse_sync
 
 # the radio parameters the receiver's processing depends on
@@ -64,7 +64,7 @@ class Receiver:
         num = Numerology.from_config(radio)
         self.fs, self.n, self.p = num.sample_rate_hz, num.fft_size, num.subcarrier_indices()
         self.cell_m = SPEED_OF_LIGHT / (2.0 * self.fs)  # 1.22 m per sample
-        self.iterations = iterations_for(self.cfg.precision_m / self.cell_m, self.cfg.max_iterations)
+        self.refiner = PeakRefiner.from_config(self.cfg, self.cell_m)
         self.backoff = int(num.cp_lengths(np.arange(1, 14)).min()) // 2  # FFT window this early
 
     def _check(self, capture: Capture) -> None:
@@ -101,7 +101,7 @@ class Receiver:
 
     def detect(self, spec: RangeSpectrum, gate: LagGate) -> Detections:
         run = detect_multi if self.cfg.detector is Detector.MULTI else detect_single
-        return run(spec, gate, self.cfg, self.iterations)
+        return run(spec, gate, self.cfg, self.refiner)
 
     def point_threshold_db(self) -> float:
         if self.cfg.point_threshold_db is not None:
@@ -124,7 +124,7 @@ class Receiver:
         t1, found, est = self.front_end(capture)
         # 3. range profile: PDP of Ĥ (single target) or MF with coherent integration (multi)
         spec = self.spectrum(est)
-        # 4. detection in the range gate, leakage cancelled, peaks refined by bisection (T2)
+        # 4. detection in the range gate, leakage cancelled, peaks refined (T2: bracketed, or the paper's bisection)
         det = self.detect(spec, self.range_gate(est.window_offset))
         valid = det.valid & found[:, None]
         delay = (est.window_offset[:, None] + det.lag) / self.fs
@@ -147,6 +147,6 @@ class Receiver:
         low, high = ((offset - self.n / 2) / self.fs, (offset + self.n / 2) / self.fs) if window_s is None else (
             np.array([window_s[0]]), np.array([window_s[1]]))
         det = detect_single(pdp_spectrum(est, self.p, self.n), self.gate(offset, low, high), self.cfg,
-                            self.iterations)
+                            self.refiner)
         t2 = (offset[0] + det.lag[0, 0] - t1[0]) / self.fs if det.valid[0, 0] else np.nan
         return float(t1[0] / self.fs), float(t2)
