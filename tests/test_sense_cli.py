@@ -47,6 +47,30 @@ def test_sense_point_filter_paper_rule_keeps_a_subset_and_a_bad_value_exits_2(ru
     assert out.returncode == 2 and "--point-filter" in out.stderr and len(out.stderr.strip().splitlines()) == 1
 
 
+def test_sense_refinement_from_the_command_line_or_the_config_file(run_dir, tmp_path):
+    """--refine paper-bisection, or refine: paper-bisection in the config file's sensing: section, senses
+    with the paper's bisection (the plate ranged alike, to millimetres); the flag overrides the file;
+    a bad value on either is one line and exit status 2, naming the flag or the dotted field."""
+    ranges = {}
+    config = tmp_path / "paper.yaml"
+    config.write_text("sensing:\n  refine: paper-bisection\n")
+    for label, args in {"bracketed": (), "flag": ("--refine", "paper-bisection"), "file": ("--config", str(config)),
+                        "override": ("--config", str(config), "--refine", "bracketed")}.items():
+        out = run("sense", str(run_dir), "--plot-pose", "-1", *args)
+        assert out.returncode == 0, out.stderr
+        scan = read_scan(run_dir / "scans" / "0000.ply")
+        ranges[label] = scan.range_m[np.argmin(np.abs(scan.angle_rad))]
+    assert abs(ranges["flag"] - 4.8) < 0.01 and ranges["flag"] == ranges["file"]
+    assert ranges["override"] == ranges["bracketed"] and abs(ranges["bracketed"] - ranges["flag"]) < 2e-3
+    out = run("sense", str(run_dir), "--refine", "golden")
+    assert out.returncode == 2 and "--refine" in out.stderr and len(out.stderr.strip().splitlines()) == 1
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("sensing:\n  refine: golden\n")
+    out = run("sense", str(run_dir), "--config", str(bad))
+    assert out.returncode == 2 and "bad.yaml" in out.stderr and "sensing.refine" in out.stderr
+    assert len(out.stderr.strip().splitlines()) == 1
+
+
 def test_sensing_a_recording_read_back_gives_the_same_scan(run_dir):
     """A test at a bound: the SigMF file path and the in-memory path give identical scans."""
     from radioslam.scene import load_scene

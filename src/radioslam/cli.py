@@ -163,32 +163,41 @@ def _parse_ranges(text: Optional[str], count: int):
 def sense(
     run_dir: Path = typer.Argument(..., help="run directory with captures/ (from 'simulate --save-iq')"),
     calibration: Optional[Path] = typer.Option(None, "--calibration", help="default: DIR/calibration.json"),
-    detector: str = typer.Option("single", "--detector", help="single (the paper's) or multi (CFAR + cancellation)"),
+    detector: Optional[str] = typer.Option(None, "--detector",
+                                           help="single (the paper's; default) or multi (CFAR + cancellation)"),
     threshold_db: Optional[float] = typer.Option(None, "--threshold-db", max=0.0,
                                                  help="point threshold (default −13 single, −25 multi)"),
-    point_filter: str = typer.Option("same-range", "--point-filter",
-                                     help="single detector: same-range (threshold re. the strongest detection at "
-                                          "each range, floor −25 dB) or scan-peak (the paper's: re. the scan's peak)"),
+    point_filter: Optional[str] = typer.Option(None, "--point-filter",
+                                               help="single detector: same-range (default: threshold re. the "
+                                                    "strongest detection at each range, floor −25 dB) or scan-peak "
+                                                    "(the paper's: re. the scan's peak)"),
+    refine: Optional[str] = typer.Option(None, "--refine",
+                                         help="peak refinement: bracketed (default: both sides of each peak "
+                                              "bracketed) or paper-bisection (the paper's, to reproduce it)"),
+    config: Optional[Path] = typer.Option(None, "--config", help="YAML config file; its sensing: section sets "
+                                          "the receiver, the options above override it"),
     plot_pose: int = typer.Option(0, "--plot-pose", help="pose whose heatmap and cloud to draw; −1: none"),
 ) -> None:
     """Turn SigMF captures into point clouds: DIR/scans/NNNN.ply."""
     from radioslam.errors import RadioslamError
     from radioslam.io import read_calibration, read_capture, write_scan
     from radioslam.io.rundir import RunDir
-    from radioslam.sensing import Detector, PointFilter, Receiver, SensingConfig
+    from radioslam.sensing import Detector, PointFilter, Receiver, Refinement
 
     run = RunDir(run_dir)
     cal = read_calibration(calibration or run.calibration)
-    try:
-        kind = Detector(detector)
-    except ValueError:
-        raise RadioslamError("must be 'single' or 'multi'", file="(command line)", field="--detector") from None
-    try:
-        rule = PointFilter(point_filter)
-    except ValueError:
-        raise RadioslamError("must be 'same-range' or 'scan-peak'", file="(command line)",
-                             field="--point-filter") from None
-    cfg = SensingConfig(detector=kind, point_threshold_db=threshold_db, point_filter=rule)
+    options = {"detector": (detector, Detector, "--detector"), "point_filter": (point_filter, PointFilter,
+               "--point-filter"), "refine": (refine, Refinement, "--refine")}
+    given = {"point_threshold_db": threshold_db} if threshold_db is not None else {}
+    for name, (value, kind, flag) in options.items():
+        if value is None:
+            continue
+        try:
+            given[name] = kind(value)
+        except ValueError:
+            allowed = " or ".join(f"'{member.value}'" for member in kind)
+            raise RadioslamError(f"must be {allowed}", file="(command line)", field=flag) from None
+    cfg = _sensing_config(config).model_copy(update=given)
     files = _capture_files(run.captures)
     receiver = None
     with progress() as bar:
@@ -208,11 +217,19 @@ def sense(
     err.print(f"wrote {len(files)} scans to {run.scans}", markup=False)
 
 
-CONFIG_HELP = "YAML config file; its slam: section sets the SLAM (see docs/architecture.md)"
+CONFIG_HELP = ("YAML config file; its slam: section sets the SLAM, its sensing: section the receiver "
+               "(docs/architecture.md)")
 ODOMETRY_HELP = "relative motion from wheels or an IMU, one TUM pose per scan (its noise: slam.motion in --config)"
 STRICT_HELP = ("exit with status 3 when tracking was lost (a stretch of scans matched nothing, or a long "
                "one in which none fixed one pose: a direction nothing fixes, rival poses alike)")
 TRACKING_LOST = 3  # exit status of --strict when tracking was lost
+
+
+def _sensing_config(path: Optional[Path]):
+    from radioslam.sensing import SensingConfig
+    from radioslam.sensing.config import load_sensing_config
+
+    return load_sensing_config(path) if path is not None else SensingConfig()
 
 
 def _slam_config(path: Optional[Path]):
@@ -279,7 +296,8 @@ def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out
     poses = len(load_scene(scene).poses)
     with progress() as bar:
         task = bar.add_task("simulating and sensing", total=poses)
-        result, metrics = run_scene(scene, out, seed, snr_db, lambda: bar.advance(task), cfg, odometry)
+        result, metrics = run_scene(scene, out, seed, snr_db, lambda: bar.advance(task), cfg, odometry,
+                                    _sensing_config(config))
     write_report(out)
     _print_metrics(metrics, json_out)
     err.print(f"wrote {out} (report.html)", markup=False)

@@ -22,7 +22,7 @@ from radioslam.io.ply import read_map_points
 from radioslam.io.ros_map import FREE, OCCUPIED, UNKNOWN, read_ros_map, write_ros_map
 from radioslam.io.rundir import RunDir
 from radioslam.scene import load_scene, scene_to_yaml
-from radioslam.sensing import Receiver, estimate_hardware_delay
+from radioslam.sensing import Receiver, SensingConfig, estimate_hardware_delay
 from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import Simulator
 from radioslam.sim.calibration_targets import calibration_ranges, simulate_calibration_captures
@@ -63,13 +63,15 @@ def prepare_run(scene_name: str, out: Path, seed: int, snr_db: float | None):
     return scene, run, calibrate_simulated(scene.radio, run.calibration, seed)
 
 
-def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None) -> dict:
-    """The files of :func:`prepare_run` and scans/ (IQ sensed in memory); stage seconds."""
+def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None,
+                       sensing: SensingConfig | None = None) -> dict:
+    """The files of :func:`prepare_run` and scans/ (IQ sensed in memory, by a receiver set by
+    ``sensing``); stage seconds."""
     timings = {}
     tick = time.perf_counter()
     scene, run, cal = prepare_run(scene_name, out, seed, snr_db)
     timings["calibrate"] = time.perf_counter() - tick
-    receiver = Receiver(scene.radio, cal.hardware_delay_s)
+    receiver = Receiver(scene.radio, cal.hardware_delay_s, sensing)
     simulate_s = sense_s = 0.0
     captures = Simulator.from_scene(scene).simulate(seed)
     for index in range(len(scene.poses)):
@@ -156,13 +158,14 @@ def read_odometry(path: Path, scans: int) -> np.ndarray:
 
 
 def run_scene(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None,
-              cfg: SlamConfig | None = None, odometry: Path | None = None) -> tuple[SlamResult, dict]:
+              cfg: SlamConfig | None = None, odometry: Path | None = None,
+              sensing: SensingConfig | None = None) -> tuple[SlamResult, dict]:
     """Simulate and sense, SLAM, evaluate: a whole run directory; the SLAM result and metrics."""
     simulated = odometry is not None and str(odometry) == SIMULATED_ODOMETRY
     if simulated and load_scene(scene_name).spec.odometry is None:
         raise RadioslamError("the scene has no odometry: block to simulate one from", file=scene_name,
                              field="odometry")
-    timings = simulate_and_sense(scene_name, out, seed, snr_db, advance)
+    timings = simulate_and_sense(scene_name, out, seed, snr_db, advance, sensing)
     result = slam_stage(out, cfg, timings, RunDir(out).odometry if simulated else odometry)
     return result, evaluate_stage(out)
 

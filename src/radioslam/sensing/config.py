@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 from enum import Enum
+from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, Field
+
+from radioslam.config_file import load_section
+from radioslam.sensing.errors import SensingError
 
 
 class Detector(str, Enum):
@@ -72,3 +76,8 @@ class SensingConfig(BaseModel):
     max_targets: int = Field(3, ge=1, le=16)  # per beam, multi-target mode
     relax_passes: int = Field(1, ge=0, le=20)  # cyclic re-estimation passes before the joint polish
     taper: Taper = Taper.NONE
+
+
+def load_sensing_config(path: str | Path) -> SensingConfig:
+    """The ``sensing:`` section of a YAML config file (other sections are left to their stages)."""
+    return load_section(path, "sensing", SensingConfig, SensingError)

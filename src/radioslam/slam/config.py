@@ -8,9 +8,9 @@ from __future__ import annotations
 from enum import Enum
 from pathlib import Path
 
-import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field
 
+from radioslam.config_file import load_section
 from radioslam.slam.errors import SlamError
 
 
@@ -263,20 +263,4 @@ class SlamConfig(_Section):
 
 def load_slam_config(path: str | Path) -> SlamConfig:
     """The ``slam:`` section of a YAML config file (other sections are left to their stages)."""
-    path = Path(path)
-    try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise SlamError("no such file", file=path, field="(file)") from None
-    except yaml.YAMLError as exc:
-        raise SlamError(f"not YAML: {str(exc).splitlines()[0]}", file=path, field="(file)") from None
-    if doc is None:
-        doc = {}
-    if not isinstance(doc, dict):
-        raise SlamError("a config file is a mapping of sections", file=path, field="(top)")
-    try:
-        return SlamConfig.model_validate(doc.get("slam") or {})
-    except ValidationError as exc:
-        first = exc.errors()[0]
-        where = ".".join(["slam", *(str(p) for p in first["loc"])])
-        raise SlamError(first["msg"], file=path, field=where) from None
+    return load_section(path, "slam", SlamConfig, SlamError)
