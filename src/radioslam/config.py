@@ -34,6 +34,26 @@ class DataMode(str, Enum):
     IDENTICAL = "identical"  # the same 16-QAM symbol repeated R times
 
 
+class Impairments(BaseModel):
+    """Hardware impairments of the simulated front end (issue #13), each off by default; their physics
+    in :mod:`radioslam.sim.impairments`. I/Q imbalance and the ADC act on the waveform (waveform mode)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    iq_gain_db: float = Field(0.0, ge=-6.0, le=6.0)  # receiver Q-rail gain relative to I
+    iq_phase_deg: float = Field(0.0, ge=-45.0, le=45.0)  # receiver quadrature error
+    adc_bits: int | None = Field(None, ge=1, le=24)  # None: an ideal converter
+    adc_backoff_db: float = Field(12.0, ge=0.0, le=40.0)  # full scale above each rail's RMS (the AGC's set point)
+    element_gain_db: float = Field(0.0, ge=0.0, le=6.0)  # σ of each element's gain error, both arrays
+    element_phase_deg: float = Field(0.0, ge=0.0, le=90.0)  # σ of each element's phase error
+    element_seed: int = Field(0, ge=0)  # the arrays' errors belong to the hardware: drawn once, from this
+
+    @property
+    def time_domain(self) -> bool:
+        """Whether an impairment acts on the received waveform (grid mode cannot model it)."""
+        return self.iq_gain_db != 0.0 or self.iq_phase_deg != 0.0 or self.adc_bits is not None
+
+
 class RadioConfig(BaseModel):
     """Every radio parameter of the simulated prototype, in SI units."""
 
@@ -63,6 +83,7 @@ class RadioConfig(BaseModel):
     calibration_targets: int = Field(16, ge=1)
     calibration_spacing_m: float = Field(0.8, gt=0)
     point_threshold_db: float = Field(-13.0, le=0)
+    impairments: Impairments = Impairments()
 
     @model_validator(mode="after")
     def _check(self) -> "RadioConfig":

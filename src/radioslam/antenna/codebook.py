@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from radioslam.antenna.array import array_response, spatial_frequency, steering_vector
-from radioslam.config import RadioConfig
+from radioslam.config import Impairments, RadioConfig
 
 
 def dft_codebook(n_elements: int, bits: int, indices: np.ndarray) -> np.ndarray:
@@ -34,6 +34,18 @@ def nearest_beam_row(beam_angles: np.ndarray, bearing_rad: float) -> int:
     return int(np.argmin(np.abs(np.angle(np.exp(1j * (np.asarray(beam_angles) - bearing_rad))))))
 
 
+def element_responses(impairments: Impairments, n_elements: int) -> tuple[tuple[complex, ...], ...] | None:
+    """Each array's per-element complex response (TX, RX): (1 + gain error)·e^{j phase error}, drawn once
+    from ``element_seed`` (they belong to the hardware); None for ideal arrays."""
+    if impairments.element_gain_db == 0.0 and impairments.element_phase_deg == 0.0:
+        return None
+    rng = np.random.default_rng(impairments.element_seed)
+    gain = 10.0 ** (rng.normal(0.0, impairments.element_gain_db, (2, n_elements)) / 20.0)
+    phase = np.radians(rng.normal(0.0, impairments.element_phase_deg, (2, n_elements)))
+    response = gain * np.exp(1j * phase)
+    return tuple(map(complex, response[0])), tuple(map(complex, response[1]))
+
+
 @dataclass(frozen=True)
 class BeamSet:
     """The swept beams of one pose: every (orientation, codebook index) pair, flattened.
@@ -46,11 +58,12 @@ class BeamSet:
     beams_per_side: int
     orientations: int
     element_exponent: float = 1.0
+    element_response: tuple[tuple[complex, ...], ...] | None = None  # (TX, RX) per element; None: ideal
 
     @classmethod
     def from_config(cls, radio: RadioConfig) -> "BeamSet":
-        return cls(radio.array_elements, radio.codebook_bits, radio.beams_per_side,
-                   radio.orientations, radio.element_exponent)
+        return cls(radio.array_elements, radio.codebook_bits, radio.beams_per_side, radio.orientations,
+                   radio.element_exponent, element_responses(radio.impairments, radio.array_elements))
 
     @property
     def codebook_indices(self) -> np.ndarray:
@@ -103,8 +116,14 @@ class BeamSet:
         cos_l = np.where(front, np.cos(local), 0.0)
         out = np.empty(local.shape)
         w = self.weights()
+        tx, rx = (np.ones(self.n_elements), np.ones(self.n_elements)) if self.element_response is None else \
+            (np.array(self.element_response[0]), np.array(self.element_response[1]))
         for k in range(self.orientations):  # 4 orientations; beams and paths stay vectorized
             rows = self.orientation == k
-            af = array_response(w[rows], spatial_frequency(local[rows][0]))
-            out[rows] = np.abs(af) ** 2
+            vartheta = spatial_frequency(local[rows][0])
+            if self.element_response is None:
+                out[rows] = np.abs(array_response(w[rows], vartheta)) ** 2
+            else:  # each array's elements respond e_n·a_n: |w^H (e_T∘a)|·|w^H (e_R∘a)|
+                out[rows] = np.abs(array_response(w[rows] * tx.conj(), vartheta)) * \
+                    np.abs(array_response(w[rows] * rx.conj(), vartheta))
         return np.where(front, out * cos_l**self.element_exponent, 0.0)

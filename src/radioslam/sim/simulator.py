@@ -19,6 +19,8 @@ from radioslam.nr.pss import pss_grid
 from radioslam.nr.qam import qam16_modulate, random_bits
 from radioslam.scene.model import Scene
 from radioslam.sim.channel import beam_path_gains, binned_channel_response, channel_response
+from radioslam.sim.errors import SimulationError
+from radioslam.sim.impairments import receiver_chain
 from radioslam.sim.noise import add_noise, noise_variance
 from radioslam.sim.paths import EchoPaths, echo_paths
 from radioslam.sim.waveform import synthesize_windows
@@ -102,6 +104,9 @@ class Simulator:
                       beam_index=self.beams.index[self.rows], beam_angle_rad=self.beams.angle[self.rows],
                       ssb_index=self.beams.slot[self.rows], symbol_indices=self.window_symbols, tx_bits=bits)
         if self.mode is CaptureMode.GRID:
+            if radio.impairments.time_domain:
+                raise SimulationError("I/Q imbalance and the ADC act on the waveform: simulate in waveform mode",
+                                      field="radio.impairments")
             # 4a. resource grid directly, y = H(p)·x + z (eq. (4)), at the receiver's FFT timing
             h = channel_response(gains, delays, p, radio.subcarrier_spacing_hz)
             h = h * np.exp(2j * np.pi * p * self.timing_offset() / num.fft_size)
@@ -115,9 +120,9 @@ class Simulator:
                                                        radio.subcarrier_spacing_hz, num.sample_rate_hz,
                                                        row_blocks=min(radio.orientations, n_beams))
         clean = synthesize_windows(tx, self.window_cp, cumulative, d_min, num, self.window_length)
-        # 5. AWGN at the ★ SNR of the reference echo
-        return Capture(mode=CaptureMode.WAVEFORM, samples=add_noise(clean, self.noise_variance, rng, inplace=True),
-                       **common)
+        # 5. AWGN at the ★ SNR of the reference echo, then the receiver's I/Q imbalance and ADC (if any)
+        received = add_noise(clean, self.noise_variance, rng, inplace=True)
+        return Capture(mode=CaptureMode.WAVEFORM, samples=receiver_chain(received, radio.impairments), **common)
 
     def simulate(self, seed: int):
         """Captures of every pose; pose i draws from its own child of ``SeedSequence(seed)``."""

@@ -1,0 +1,106 @@
+"""Hardware impairments (issue #13, point 5) against their closed forms: the image rejection ratio
+of an I/Q imbalance, the SNR of a b-bit quantizer and its clipping, the sidelobe floor that random
+element errors raise; off by default, refused where the capture mode cannot model them."""
+
+import numpy as np
+import pytest
+import yaml
+
+from radioslam.antenna.array import array_response, spatial_frequency
+from radioslam.antenna.codebook import BeamSet, dft_codebook, element_responses
+from radioslam.capture import CaptureMode
+from radioslam.config import Impairments, RadioConfig
+from radioslam.scene import load_scene, scene_to_yaml
+from radioslam.scene.loader import scene_from_mapping
+from radioslam.sim import Simulator
+from radioslam.sim.errors import SimulationError
+from radioslam.sim.impairments import (
+    apply_iq_imbalance,
+    gaussian_adc_snr_db,
+    image_rejection_db,
+    quantization_snr_db,
+    quantize,
+    receiver_chain,
+)
+
+
+@pytest.mark.parametrize("gain_db, phase_deg", [(0.5, 0.0), (0.0, 3.0), (1.0, 5.0), (-0.3, -2.0)])
+def test_iq_imbalance_leaves_an_image_at_minus_f_one_irr_below_the_tone(gain_db, phase_deg):
+    n, k = 1024, 37
+    tone = np.exp(2j * np.pi * k * np.arange(n) / n)
+    spectrum = np.abs(np.fft.fft(apply_iq_imbalance(tone, gain_db, phase_deg))) ** 2
+    g, phi = 10 ** (gain_db / 20), np.radians(phase_deg)
+    closed_form = 10 * np.log10((1 + 2 * g * np.cos(phi) + g**2) / (1 - 2 * g * np.cos(phi) + g**2))
+    assert np.isclose(10 * np.log10(spectrum[k] / spectrum[n - k]), closed_form, atol=1e-6)
+    assert np.isclose(image_rejection_db(gain_db, phase_deg), closed_form)
+    others = np.delete(spectrum, [k, n - k])
+    assert others.max() < 1e-12 * spectrum[k]  # nothing but the tone and its image
+
+
+def test_a_balanced_receiver_and_an_ideal_adc_change_nothing():
+    x = np.random.default_rng(0).standard_normal((3, 500)).astype(np.complex64)
+    assert np.array_equal(receiver_chain(x, Impairments()), x)
+    assert image_rejection_db(0.0, 0.0) == float("inf")
+
+
+# (12 bits, 12 dB) is left out: its error is 60 clipped samples of 2·10⁶, too few for a 0.3 dB estimate
+@pytest.mark.parametrize("bits, backoff_db", [(4, 9.0), (4, 12.0), (4, 15.0), (8, 9.0), (8, 12.0), (8, 15.0),
+                                              (12, 9.0), (12, 15.0)])
+def test_quantization_snr_is_six_db_per_bit_less_the_backoff_until_clipping_sets_it(bits, backoff_db):
+    """A Gaussian rail (OFDM): SNR = −10 log10(Δ²/12 + clipped tails) in units of σ², which is
+    6.02·b + 4.77 − backoff while the tails are negligible."""
+    rng = np.random.default_rng(bits)
+    x = (rng.standard_normal((4, 250_000)) + 1j * rng.standard_normal((4, 250_000))) / np.sqrt(2)
+    error = quantize(x, bits, backoff_db) - x
+    measured = 10 * np.log10(np.mean(np.abs(x) ** 2) / np.mean(np.abs(error) ** 2))
+    assert abs(measured - gaussian_adc_snr_db(bits, backoff_db)) < 0.3
+    if bits == 4 and backoff_db >= 12:  # quantization-limited: the textbook rule
+        assert abs(gaussian_adc_snr_db(bits, backoff_db) - quantization_snr_db(bits, backoff_db)) < 0.1
+
+
+def test_the_adc_clips_at_its_full_scale_and_has_2_to_the_b_levels():
+    x = np.linspace(-10, 10, 4001)[None, :] * (1 + 1j)
+    rms = np.sqrt(np.mean(x.real**2))
+    q = quantize(x, 3, 6.0)
+    full_scale = rms * 10 ** (6.0 / 20)
+    step = 2 * full_scale / 8
+    assert len(np.unique(q.real)) == 8
+    assert np.isclose(q.real.max(), full_scale - step / 2) and np.isclose(q.real.min(), -full_scale + step / 2)
+
+
+def test_element_errors_raise_the_sidelobe_floor_by_their_variance():
+    """Random element responses e_n: at the ideal pattern's nulls the one-way power |w^H(e∘a)|² averages
+    E|e − 1|²·‖w‖² (‖w‖ = 1), the classic random-error sidelobe floor."""
+    n, bits = 8, 6
+    w = dft_codebook(n, bits, np.array([0]))
+    nulls = spatial_frequency(np.arcsin(2 * np.arange(1, 4) / n))  # sin θ = 2k/N: nulls of boresight
+    assert np.abs(array_response(w, nulls)).max() < 1e-12
+    impairment = dict(element_gain_db=0.5, element_phase_deg=8.0)
+    powers, deviations = [], []
+    for seed in range(400):
+        tx, _ = element_responses(Impairments(**impairment, element_seed=seed), n)
+        e = np.array(tx)
+        powers.append(np.abs(array_response(w * e.conj(), nulls)) ** 2)
+        deviations.append(np.abs(e - 1) ** 2)
+    assert np.isclose(np.mean(powers), np.mean(deviations), rtol=0.15)
+    assert element_responses(Impairments(), n) is None
+
+
+def test_element_errors_change_the_two_way_gain_and_ideal_arrays_keep_it():
+    ideal = BeamSet.from_config(RadioConfig())
+    radio = RadioConfig(impairments=Impairments(element_gain_db=1.0, element_phase_deg=10.0, element_seed=3))
+    distorted = BeamSet.from_config(radio)
+    angles = np.radians(np.linspace(-80, 80, 161))
+    g0, g1 = ideal.two_way_gain(angles), distorted.two_way_gain(angles)
+    assert np.allclose(g0.max(), ideal.n_elements)  # the two-way peak is N
+    assert 0.5 < g1.max() / g0.max() < 1.5 and not np.allclose(g0, g1)
+
+
+def test_impairments_live_in_the_scene_file_and_grid_mode_refuses_the_time_domain_ones():
+    scene = load_scene("single-plate:4.8").with_radio(impairments={"adc_bits": 8, "iq_phase_deg": 2.0})
+    again = scene_from_mapping(yaml.safe_load(scene_to_yaml(scene)), "round-trip")
+    assert again.radio.impairments == scene.radio.impairments
+    with pytest.raises(SimulationError, match="waveform"):
+        Simulator.from_scene(scene, CaptureMode.GRID, rows=[23]).simulate_pose(0, np.random.default_rng(0))
+    capture = Simulator.from_scene(scene, rows=[23]).simulate_pose(0, np.random.default_rng(0))
+    assert len(np.unique(capture.samples.real)) <= 2**8
