@@ -104,3 +104,19 @@ def test_impairments_live_in_the_scene_file_and_grid_mode_refuses_the_time_domai
         Simulator.from_scene(scene, CaptureMode.GRID, rows=[23]).simulate_pose(0, np.random.default_rng(0))
     capture = Simulator.from_scene(scene, rows=[23]).simulate_pose(0, np.random.default_rng(0))
     assert len(np.unique(capture.samples.real)) <= 2**8
+
+
+def test_a_hardware_delay_drift_after_calibration_moves_every_range_by_c_times_drift_over_two():
+    """Calibrated before the drift (eq. (11) on the plates), sensed after it: the ranges move by c·δ/2."""
+    from radioslam.config import SPEED_OF_LIGHT
+    from radioslam.sensing import Receiver, estimate_hardware_delay
+    from radioslam.sim.calibration_targets import calibration_ranges, plate_simulator, simulate_calibration_captures
+
+    drift = 200e-12
+    radio = RadioConfig(impairments=Impairments(hardware_delay_drift_s=drift))
+    ranges = calibration_ranges(radio)
+    calibration = estimate_hardware_delay(simulate_calibration_captures(radio, ranges, 0), ranges)
+    assert abs(calibration.hardware_delay_s - radio.hardware_delay_s) < 20e-12  # calibrated before the drift
+    capture = plate_simulator(radio, 4.8).simulate_pose(0, np.random.default_rng(1))
+    sensed = Receiver(radio, calibration.hardware_delay_s).sense(capture).range_m[0, 0]
+    assert abs(sensed - 4.8 - SPEED_OF_LIGHT * drift / 2) < 4e-3

@@ -47,6 +47,13 @@ class Impairments(BaseModel):
     element_gain_db: float = Field(0.0, ge=0.0, le=6.0)  # σ of each element's gain error, both arrays
     element_phase_deg: float = Field(0.0, ge=0.0, le=90.0)  # σ of each element's phase error
     element_seed: int = Field(0, ge=0)  # the arrays' errors belong to the hardware: drawn once, from this
+    # the hardware delay's change between calibration (eq. (11)) and use: every sensing capture's T_H is
+    # hardware_delay_s + this, the calibration plates' hardware_delay_s
+    hardware_delay_drift_s: float = Field(0.0, ge=-1e-6, le=1e-6)
+
+    def at_calibration(self) -> "Impairments":
+        """The same hardware when it was calibrated: no drift yet."""
+        return self.model_copy(update={"hardware_delay_drift_s": 0.0})
 
     @property
     def time_domain(self) -> bool:

@@ -22,9 +22,12 @@ def boresight_row(radio: RadioConfig) -> int:
     return radio.beams_per_side
 
 
-def plate_simulator(radio: RadioConfig, range_m: float, mode: CaptureMode = CaptureMode.WAVEFORM) -> Simulator:
-    """The boresight beam of ``radio`` facing the 1 m² metal plate at ``range_m``."""
-    scene = single_plate(float(range_m)).with_radio(**radio.model_dump())
+def plate_simulator(radio: RadioConfig, range_m: float, mode: CaptureMode = CaptureMode.WAVEFORM,
+                    calibrating: bool = False) -> Simulator:
+    """The boresight beam of ``radio`` facing the 1 m² metal plate at ``range_m``; ``calibrating``: as the
+    hardware was when calibrated, before any hardware-delay drift."""
+    impairments = radio.impairments.at_calibration() if calibrating else radio.impairments
+    scene = single_plate(float(range_m)).with_radio(**{**radio.model_dump(), "impairments": impairments})
     return Simulator.from_scene(scene, mode, rows=[boresight_row(radio)])
 
 
@@ -34,5 +37,6 @@ def simulate_calibration_captures(radio: RadioConfig, ranges_m: np.ndarray, seed
     children = np.random.SeedSequence(seed).spawn(len(ranges_m))
     captures = []
     for r, child in zip(ranges_m, children):
-        captures.append(plate_simulator(radio, r, mode).simulate_pose(0, np.random.default_rng(child)))
+        simulator = plate_simulator(radio, r, mode, calibrating=True)
+        captures.append(simulator.simulate_pose(0, np.random.default_rng(child)))
     return captures

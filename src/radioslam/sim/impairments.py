@@ -18,6 +18,10 @@
   element n of the TX and of the RX array responds with (1 + ε_g)·e^{jε_φ} instead of 1, ε drawn once
   from ``element_seed`` (they belong to the hardware, not to a capture). The beams' sidelobes rise and
   their peaks shift: the two-way gain is |w^H(e_T∘a)|·|w^H(e_R∘a)| instead of |w^H a|².
+* **Hardware-delay drift** (``hardware_delay_drift_s``, in the simulator and
+  :func:`radioslam.sim.calibration_targets.plate_simulator`): T_H changes by δ between the
+  calibration of eq. (11) and the captures sensed with it, so every range moves by c·δ/2 (3 cm per
+  200 ps), a bias no averaging removes.
 """
 
 from __future__ import annotations

@@ -73,7 +73,8 @@ class Simulator:
         rows = np.arange(len(beams)) if rows is None else np.asarray(rows, dtype=np.int64)
         symbols = schedule.window_symbols(beams.orientation, beams.slot)[rows]
         cp = num.cp_lengths(symbols)
-        longest_delay = radio.hardware_delay_s + (2 * radio.max_range_m + radio.array_baseline_m) / SPEED_OF_LIGHT
+        longest_delay = radio.hardware_delay_s + max(radio.impairments.hardware_delay_drift_s, 0.0) + \
+            (2 * radio.max_range_m + radio.array_baseline_m) / SPEED_OF_LIGHT
         # the window length depends on the radio only, never on the beam subset
         all_cp = num.cp_lengths(schedule.window_symbols(beams.orientation, beams.slot))
         window = int((all_cp + num.fft_size).sum(axis=1).max()
@@ -95,7 +96,7 @@ class Simulator:
         radio, num = self.radio, self.numerology
         # 2. two-way beam gain ϖ of every path on every beam (eq. (4))
         gains = beam_path_gains(self.beams, paths)[self.rows]
-        delays = paths.delay_s + radio.hardware_delay_s
+        delays = paths.delay_s + radio.hardware_delay_s + radio.impairments.hardware_delay_drift_s
         # 3. what each beam transmits: PSS symbol, then R symbols of random 16-QAM
         n_beams = len(self.rows)
         bits = draw_tx_bits(radio, n_beams, rng)
