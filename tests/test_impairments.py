@@ -16,10 +16,12 @@ from radioslam.sim import Simulator
 from radioslam.sim.errors import SimulationError
 from radioslam.sim.impairments import (
     apply_iq_imbalance,
+    compress,
     gaussian_adc_snr_db,
     image_rejection_db,
     quantization_snr_db,
     quantize,
+    rapp,
     receiver_chain,
 )
 
@@ -120,3 +122,37 @@ def test_a_hardware_delay_drift_after_calibration_moves_every_range_by_c_times_d
     capture = plate_simulator(radio, 4.8).simulate_pose(0, np.random.default_rng(1))
     sensed = Receiver(radio, calibration.hardware_delay_s).sense(capture).range_m[0, 0]
     assert abs(sensed - 4.8 - SPEED_OF_LIGHT * drift / 2) < 4e-3
+
+
+@pytest.mark.parametrize("smoothness", [1.0, 2.0, 5.0])
+def test_rapp_is_linear_when_small_saturates_when_large_and_compresses_1_db_where_the_closed_form_says(smoothness):
+    saturation = 2.0
+    assert np.isclose(rapp(np.array(1e-4), saturation, smoothness), 1e-4)
+    assert np.isclose(rapp(np.array(1e6), saturation, smoothness), saturation, rtol=1e-6)
+    one_db = saturation * (10 ** (smoothness / 10) - 1) ** (1 / (2 * smoothness))
+    assert np.isclose(20 * np.log10(rapp(np.array(one_db), saturation, smoothness) / one_db), -1.0)
+
+
+@pytest.mark.parametrize("backoff_db", [0.0, 3.0, 8.0])
+def test_pa_compression_in_band_is_bussgangs_gain_times_the_symbols_plus_uncorrelated_distortion(backoff_db):
+    """OFDM time samples are nearly complex Gaussian: a memoryless PA gives y = α·x + d with
+    α = E[f(A)·A]/E[A²] (A Rayleigh) and d uncorrelated with x, on every subcarrier."""
+    from radioslam.nr.numerology import Numerology
+    from radioslam.nr.qam import qam16_modulate, random_bits
+
+    radio = RadioConfig()
+    num = Numerology.from_config(radio)
+    rng = np.random.default_rng(0)
+    x = qam16_modulate(random_bits(rng, (64, 12, radio.n_subcarriers * 4)))
+    y = compress(x, num, backoff_db, 2.0)
+    measured = np.vdot(x, y) / np.vdot(x, x)
+    # the Bussgang gain of the Rapp curve over a Rayleigh amplitude (σ² = the time samples' mean power)
+    sigma2 = np.mean(np.abs(x) ** 2) * radio.n_subcarriers / radio.fft_size
+    a = np.linspace(0, 8 * np.sqrt(sigma2), 200_001)
+    density = 2 * a / sigma2 * np.exp(-a**2 / sigma2)
+    saturation = np.sqrt(sigma2) * 10 ** (backoff_db / 20)
+    integrand = rapp(a, saturation, 2.0) * a * density  # (np.trapezoid is numpy ≥ 2; the pin is 1.26)
+    alpha = float(np.sum(0.5 * (integrand[1:] + integrand[:-1]) * np.diff(a))) / sigma2
+    assert abs(measured.imag) < 1e-3 and np.isclose(measured.real, alpha, rtol=0.01)
+    distortion = y - measured * x
+    assert abs(np.vdot(x, distortion)) / np.sqrt(np.vdot(x, x).real * np.vdot(distortion, distortion).real) < 1e-3

@@ -47,6 +47,8 @@ class Impairments(BaseModel):
     element_gain_db: float = Field(0.0, ge=0.0, le=6.0)  # σ of each element's gain error, both arrays
     element_phase_deg: float = Field(0.0, ge=0.0, le=90.0)  # σ of each element's phase error
     element_seed: int = Field(0, ge=0)  # the arrays' errors belong to the hardware: drawn once, from this
+    pa_backoff_db: float | None = Field(None, ge=-10.0, le=30.0)  # PA saturation above the TX RMS; None: linear
+    pa_smoothness: float = Field(2.0, gt=0.0, le=20.0)  # Rapp's p (large: a hard limiter)
     # the hardware delay's change between calibration (eq. (11)) and use: every sensing capture's T_H is
     # hardware_delay_s + this, the calibration plates' hardware_delay_s
     hardware_delay_drift_s: float = Field(0.0, ge=-1e-6, le=1e-6)

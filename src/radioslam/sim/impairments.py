@@ -18,6 +18,13 @@
   element n of the TX and of the RX array responds with (1 + ε_g)·e^{jε_φ} instead of 1, ε drawn once
   from ``element_seed`` (they belong to the hardware, not to a capture). The beams' sidelobes rise and
   their peaks shift: the two-way gain is |w^H(e_T∘a)|·|w^H(e_R∘a)| instead of |w^H a|².
+* **PA compression** (Rapp 1991): the transmitter's amplifier maps an input amplitude A to
+  A / (1 + (A/A_sat)^{2p})^{1/(2p)}, phase untouched (a solid-state PA's AM/PM is small), with A_sat
+  ``pa_backoff_db`` above the burst's RMS. Memoryless, it keeps each OFDM symbol cyclic, so the
+  distorted symbol is still one spectrum: its active subcarriers are what the channel carries (the
+  out-of-band products fall outside them). By Bussgang's theorem the in-band output is α·x plus a
+  distortion uncorrelated with x: the receiver, which divides by the symbols it sent, sees a gain
+  α and a noise floor.
 * **Hardware-delay drift** (``hardware_delay_drift_s``, in the simulator and
   :func:`radioslam.sim.calibration_targets.plate_simulator`): T_H changes by δ between the
   calibration of eq. (11) and the captures sensed with it, so every range moves by c·δ/2 (3 cm per
@@ -29,8 +36,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import scipy.fft as sfft
 
 from radioslam.config import Impairments
+from radioslam.nr.numerology import Numerology
+from radioslam.nr.ofdm import from_fft_bins, to_fft_bins
 
 
 def iq_coefficients(gain_db: float, phase_deg: float) -> tuple[complex, complex]:
@@ -78,6 +88,31 @@ def quantize(samples: np.ndarray, bits: int, backoff_db: float) -> np.ndarray:
         level = np.clip(np.floor(rails / step), -(2 ** (bits - 1)), 2 ** (bits - 1) - 1)
     quantized = np.where(step > 0, (level + 0.5) * step, 0.0)
     return (quantized[0] + 1j * quantized[1]).astype(samples.dtype)
+
+
+def rapp(amplitude: np.ndarray, saturation: float | np.ndarray, smoothness: float) -> np.ndarray:
+    """Rapp's AM/AM: A / (1 + (A/A_sat)^{2p})^{1/(2p)}."""
+    ratio = amplitude / saturation
+    return amplitude / (1.0 + ratio ** (2.0 * smoothness)) ** (1.0 / (2.0 * smoothness))
+
+
+def compress(symbols: np.ndarray, numerology: Numerology, backoff_db: float, smoothness: float) -> np.ndarray:
+    """Frequency-domain symbols (..., L, n_sc) through a Rapp PA in time (A_sat ``backoff_db`` above the
+    RMS of each burst, the last two axes): the distorted symbols' active subcarriers."""
+    time = sfft.ifft(to_fft_bins(symbols, numerology), axis=-1, norm="ortho")
+    rms = np.sqrt(np.mean(np.abs(time) ** 2, axis=(-2, -1), keepdims=True))
+    amplitude = np.abs(time)
+    scale = np.divide(rapp(amplitude, rms * 10.0 ** (backoff_db / 20.0), smoothness), amplitude,
+                      out=np.ones_like(amplitude), where=amplitude > 0)
+    distorted = sfft.fft(time * scale, axis=-1, norm="ortho")
+    return from_fft_bins(distorted, numerology).astype(symbols.dtype)
+
+
+def transmitter_chain(symbols: np.ndarray, numerology: Numerology, impairments: Impairments) -> np.ndarray:
+    """What the transmitter radiates of the symbols (..., L, n_sc): the PA's compression, if any."""
+    if impairments.pa_backoff_db is None:
+        return symbols
+    return compress(symbols, numerology, impairments.pa_backoff_db, impairments.pa_smoothness)
 
 
 def receiver_chain(samples: np.ndarray, impairments: Impairments) -> np.ndarray:

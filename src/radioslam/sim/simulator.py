@@ -20,7 +20,7 @@ from radioslam.nr.qam import qam16_modulate, random_bits
 from radioslam.scene.model import Scene
 from radioslam.sim.channel import beam_path_gains, binned_channel_response, channel_response
 from radioslam.sim.errors import SimulationError
-from radioslam.sim.impairments import receiver_chain
+from radioslam.sim.impairments import receiver_chain, transmitter_chain
 from radioslam.sim.noise import add_noise, noise_variance
 from radioslam.sim.paths import EchoPaths, echo_paths
 from radioslam.sim.waveform import synthesize_windows
@@ -97,7 +97,7 @@ class Simulator:
         # 2. two-way beam gain ϖ of every path on every beam (eq. (4))
         gains = beam_path_gains(self.beams, paths)[self.rows]
         delays = paths.delay_s + radio.hardware_delay_s + radio.impairments.hardware_delay_drift_s
-        # 3. what each beam transmits: PSS symbol, then R symbols of random 16-QAM
+        # 3. what each beam transmits: PSS symbol, then R symbols of random 16-QAM (through the PA in 4a/4b)
         n_beams = len(self.rows)
         bits = draw_tx_bits(radio, n_beams, rng)
         p = num.subcarrier_indices()
@@ -111,12 +111,14 @@ class Simulator:
             # 4a. resource grid directly, y = H(p)·x + z (eq. (4)), at the receiver's FFT timing
             h = channel_response(gains, delays, p, radio.subcarrier_spacing_hz)
             h = h * np.exp(2j * np.pi * p * self.timing_offset() / num.fft_size)
-            grid = add_noise(h[:, None, :] * qam16_modulate(bits), self.noise_variance, rng)
+            sent = transmitter_chain(qam16_modulate(bits), num, radio.impairments)
+            grid = add_noise(h[:, None, :] * sent, self.noise_variance, rng)
             return Capture(mode=CaptureMode.GRID, grid=grid, fft_offset_samples=self.timing_offset(), **common)
         # 4b. time-domain windows: every path at its exact fractional delay
         tx = np.empty((n_beams, 1 + radio.symbols_per_beam, len(p)), dtype=np.complex64)
         tx[:, 0] = self.pss_symbol
         tx[:, 1:] = qam16_modulate(bits, np.complex64)
+        tx = transmitter_chain(tx, num, radio.impairments)  # the PA's compression, if any
         d_min, _, cumulative = binned_channel_response(gains, delays * num.sample_rate_hz, p,
                                                        radio.subcarrier_spacing_hz, num.sample_rate_hz,
                                                        row_blocks=min(radio.orientations, n_beams))
