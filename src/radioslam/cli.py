@@ -341,19 +341,26 @@ def reproduce(
     json_out: bool = typer.Option(False, "--json", help="print one JSON object of the results on stdout"),
     seed: int = typer.Option(0, "--seed", min=0),
     trials: Optional[int] = typer.Option(None, "--trials", min=1, help="Monte Carlo trials (default per experiment)"),
+    impairments: str = typer.Option("ideal", "--impairments",
+                                    help="table1: the radio's hardware profile (ideal, iq, adc, pa, elements, "
+                                         "drift, prototype; docs/architecture.md)"),
 ) -> None:
-    """Reproduce the paper's experiments: Table I, Fig. 5, Fig. 8 and Fig. 6 (SLAM on paper-cnv)."""
+    """Reproduce the paper's experiments: Table I, Fig. 5, Fig. 8 and Fig. 6 (SLAM on paper-cnv); and
+    Table I under hardware impairments (impairments)."""
     import json
 
     from radioslam.errors import RadioslamError
-    from radioslam.eval.experiments.reproduce import EXPERIMENTS, run_experiment
+    from radioslam.eval.experiments.reproduce import EXPERIMENTS, IMPAIRMENT_PROFILES, run_experiment
 
     names = list(EXPERIMENTS) if experiment == "all" else [experiment]
     if any(n not in EXPERIMENTS for n in names):
         raise RadioslamError(f"unknown experiment {experiment!r} (known: {', '.join(EXPERIMENTS)}, all)",
                              file="(command line)", field="EXPERIMENT")
+    if impairments not in IMPAIRMENT_PROFILES:
+        raise RadioslamError(f"unknown profile {impairments!r} (known: {', '.join(IMPAIRMENT_PROFILES)})",
+                             file="(command line)", field="--impairments")
     out.mkdir(parents=True, exist_ok=True)
-    results = {n: run_experiment(n, out, seed, trials) for n in names}
+    results = {n: run_experiment(n, out, seed, trials, impairments) for n in names}
     if json_out:
         typer.echo(json.dumps(results[names[0]] if len(names) == 1 else results))
     err.print(f"wrote {', '.join(names)} to {out}", markup=False)

@@ -6,20 +6,21 @@ from pathlib import Path
 
 from radioslam.eval.experiments.fig5 import MODES, run_fig5
 from radioslam.eval.experiments.fig8 import RANGES_M, run_fig8
-from radioslam.eval.experiments.table1 import run_table1
+from radioslam.eval.experiments.impairments import PROFILES, run_impairment_table, table1_under
 from radioslam.io.tables import write_table
 
 
-def _table1(out: Path, seed: int, trials: int | None) -> dict:
+def _table1(out: Path, seed: int, trials: int | None, impairments: str = "ideal") -> dict:
+    """Table I; under ``impairments`` (a name of :data:`PROFILES`) the radio has that hardware."""
     from radioslam.viz.figures import table1_figure
 
-    r = run_table1(trials=trials or 50, seed=seed)
+    r = table1_under(impairments, trials=trials or 50, seed=seed)
     write_table(out / "table1", ["range_m", "err_ifft_m", "err_bisection_m"],
                 [[float(a), float(b), float(c)] for a, b, c in zip(r.ranges_m, r.err_ifft_m, r.err_bisection_m)])
     write_table(out / "table1_crb", ["snr_db", "rmse_bisection_m", "crb_m", "ratio"],
                 [[float(s), float(e), float(c), float(e / c)] for s, e, c in zip(r.crb_snr_db, r.crb_rmse_m, r.crb_m)])
     table1_figure(out / "table1.png", r)
-    return r.to_json()
+    return {**r.to_json(), "impairments": impairments}
 
 
 def _fig5(out: Path, seed: int, trials: int | None) -> dict:
@@ -61,8 +62,20 @@ def _fig6(out: Path, seed: int, trials: int | None) -> dict:
     return metrics
 
 
-EXPERIMENTS = {"table1": _table1, "fig5": _fig5, "fig8": _fig8, "fig6": _fig6}
+def _impairments(out: Path, seed: int, trials: int | None) -> dict:
+    """Table I's ranging RMSE under each hardware impairment alone and under the prototype's profile."""
+    rows = run_impairment_table(trials=trials or 20, seed=seed)
+    write_table(out / "impairments", ["profile", "rmse_ifft_m", "rmse_refined_m", "hardware_delay_error_s"],
+                [[r.profile, r.rmse_ifft_m, r.rmse_refined_m, r.hardware_delay_error_s] for r in rows])
+    return {"rows": [r.to_json() for r in rows]}
 
 
-def run_experiment(name: str, out: Path, seed: int, trials: int | None) -> dict:
+EXPERIMENTS = {"table1": _table1, "fig5": _fig5, "fig8": _fig8, "fig6": _fig6, "impairments": _impairments}
+IMPAIRMENT_PROFILES = tuple(PROFILES)
+
+
+def run_experiment(name: str, out: Path, seed: int, trials: int | None, impairments: str = "ideal") -> dict:
+    """One experiment; ``impairments`` applies to Table I only (the others run on the ideal radio)."""
+    if name == "table1":
+        return _table1(out, seed, trials, impairments)
     return EXPERIMENTS[name](out, seed, trials)
