@@ -38,17 +38,20 @@ REFERENCE_POINTS = 16385  # 1/8192 sample over ±1 sample
 ZOOM_POINTS = 257  # 1/128 sample over ±1 sample
 
 
+def shifted(spec: RangeSpectrum, start: np.ndarray) -> np.ndarray:
+    """The spectrum (R, n_sc) whose transforms start at lag ``start`` (R,): F(start + t) = Σ_i S'_i e^{j2π i t/N}
+    up to the first subcarrier's unit-modulus factor e^{j2π p0 (start + t)/N}, which |F| does not see."""
+    index = np.arange(len(spec.p))
+    return spec.s * np.exp(2j * np.pi * index[None, :] * start[:, None] / spec.fft_size)
+
+
 def zoom(spec: RangeSpectrum, centre: np.ndarray, points: int) -> tuple[np.ndarray, np.ndarray]:
-    """|F| on ``points`` lags evenly over [centre − 1, centre + 1] per row (R, points), by chirp-z: the
-    spectrum is shifted to the bracket's start, then one czt per row set (scipy.signal.czt)."""
-    n = spec.fft_size
+    """|F| on ``points`` lags evenly over [centre − 1, centre + 1] per row (R, points), by one chirp-z
+    (scipy.signal.czt) over the spectrum shifted to the bracket's start."""
     step = 2.0 / (points - 1)
     start = centre - 1.0
-    index = np.arange(len(spec.p))
-    shifted = spec.s * np.exp(2j * np.pi * index[None, :] * start[:, None] / n)
-    values = ss.czt(shifted, points, w=np.exp(2j * np.pi * step / n), a=1.0, axis=-1)
+    values = ss.czt(shifted(spec, start), points, w=np.exp(2j * np.pi * step / spec.fft_size), a=1.0, axis=-1)
     lags = start[:, None] + step * np.arange(points)[None, :]
-    # F(t) = e^{j2π p0 t / N} Σ_i S_i e^{j2π i t / N}: the first factor has modulus one, |F| needs no more
     return lags, np.abs(values) / np.abs(spec.scale)[:, None]
 
 
@@ -56,11 +59,9 @@ def zoomfft(spec: RangeSpectrum, centre: np.ndarray, points: int) -> np.ndarray:
     """The lag of the largest |F| on the ZoomFFT grid (scipy.signal.ZoomFFT), one transform for all rows."""
     n = spec.fft_size
     start = centre - 1.0
-    index = np.arange(len(spec.p))
-    shifted = spec.s * np.exp(2j * np.pi * index[None, :] * start[:, None] / n)
     # ZoomFFT evaluates X(f) = Σ x[k] e^{−j2π f k / fs} on [f1, f2]: F over [0, 2] samples is f from 0 to −2/N
     transform = ss.ZoomFFT(len(spec.p), [-2.0 / n, 0.0], m=points, fs=1.0, endpoint=True)
-    values = transform(shifted, axis=-1)[:, ::-1]  # f = 0 … −2/N reversed: lag offsets 0 … 2
+    values = transform(shifted(spec, start), axis=-1)[:, ::-1]  # f = 0 … −2/N reversed: lag offsets 0 … 2
     best = np.argmax(np.abs(values), axis=1)
     return start + 2.0 * best / (points - 1)
 

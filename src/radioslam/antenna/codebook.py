@@ -116,12 +116,11 @@ class BeamSet:
         cos_l = np.where(front, np.cos(local), 0.0)
         out = np.empty(local.shape)
         w = self.weights()
-        tx, rx = (np.ones(self.n_elements), np.ones(self.n_elements)) if self.element_response is None else \
-            (np.array(self.element_response[0]), np.array(self.element_response[1]))
+        tx, rx = (None, None) if self.element_response is None else map(np.array, self.element_response)
         for k in range(self.orientations):  # 4 orientations; beams and paths stay vectorized
             rows = self.orientation == k
             vartheta = spatial_frequency(local[rows][0])
-            if self.element_response is None:
+            if tx is None:
                 out[rows] = np.abs(array_response(w[rows], vartheta)) ** 2
             else:  # each array's elements respond e_n·a_n: |w^H (e_T∘a)|·|w^H (e_R∘a)|
                 out[rows] = np.abs(array_response(w[rows] * tx.conj(), vartheta)) * \

@@ -42,7 +42,7 @@ class PointFilter(str, Enum):
 class Refinement(str, Enum):
     """How an integer range-profile peak is refined to a fractional lag (T2)."""
 
-    BRACKETED = "bracketed"  # both sides bracketed on a quarter-sample grid, golden section per lobe
+    BRACKETED = "bracketed"  # both sides on a quarter-sample grid, safeguarded Newton per lobe that may win
     PAPER_BISECTION = "paper-bisection"  # the paper's fractional-IFFT bisection (§III-A), to reproduce it
 
 

@@ -3,7 +3,7 @@ as the paper's prototype might have them (``prototype``), ranging RMSE of the re
 against the plain N_c-point IFFT peak (T1's grid).
 
 The profile is an estimate from the prototype's parts (paper §V, Table II), not a measurement; each
-value and why is in ``PROFILE_NOTES`` (and docs/architecture.md). Phase noise is not modelled yet:
+value and why is in docs/architecture.md (§ Hardware impairments). Phase noise is not modelled yet:
 the profile leaves it out.
 """
 
@@ -14,6 +14,8 @@ from dataclasses import dataclass
 from radioslam.config import Impairments, RadioConfig
 from radioslam.eval.experiments.table1 import Table1Result, run_table1
 
+# iq: a mixer's 30–35 dB image rejection; adc: the USRP-2974's 14 bits; pa: driven for range; elements:
+# uncalibrated phase shifters; drift: temperature between calibration and use (docs/architecture.md)
 PROFILES: dict[str, Impairments] = {
     "ideal": Impairments(),
     "iq": Impairments(iq_gain_db=0.3, iq_phase_deg=2.0),
@@ -24,14 +26,6 @@ PROFILES: dict[str, Impairments] = {
 }
 PROFILES["prototype"] = Impairments(**{k: v for p in PROFILES.values() for k, v in p.model_dump(exclude_defaults=True)
                                        .items()})
-
-PROFILE_NOTES = {
-    "iq": "an analogue I/Q mixer's image rejection of 30–35 dB (here 32 dB): 0.3 dB, 2°",
-    "adc": "the USRP-2974's 14-bit ADC, its AGC set 12 dB below full scale",
-    "pa": "a 28 GHz PA driven for range, saturation 6 dB above the burst's RMS, Rapp p = 2",
-    "elements": "an uncalibrated 8-element row of the 8×8 UPA: 1 dB and 10° rms per element",
-    "drift": "the TX→RX path's delay drifting 100 ps (1.5 cm) between calibration and use (temperature)",
-}
 
 
 @dataclass(frozen=True)
