@@ -286,6 +286,29 @@ def test_a_wall_the_map_lacks_fixes_nothing():
     assert matched_weak_direction(both, pose, scan, normals, tight, 4.0) is None
 
 
+def test_a_match_slid_along_its_walls_is_settled_by_the_wall_facing_along_them():
+    """The terminal stepped 0.6 m along a wall toward a wall across its path, and the match kept it
+    still: the across wall's points, 0.6 m off, disagree and drop out of the information, so the
+    match looks degenerate along the walk. Slid along that direction to where the points facing it
+    fit, the match is no longer degenerate; with the across wall not in the map, nothing settles it."""
+    from radioslam.slam.degeneracy import DegeneracyTest
+
+    test = DegeneracyTest(4.0, 0.5, 6, 2.0)
+    along = np.column_stack([np.linspace(-3, 3, 61), np.full(61, 2.0)])  # a wall y = 2, normal −90°
+    across = np.column_stack([np.full(41, 4.0), np.linspace(-2, 2, 41)])  # a wall x = 4, normal 180°
+    normals = np.concatenate([np.full(61, -np.pi / 2), np.full(41, np.pi)])
+    both = LikelihoodGrid.from_points(np.vstack([along, across]), 0.05, 0.05, 1.0, normals, np.radians(1.0), 0.5)
+    scan = np.vstack([along, across]) - [0.6, 0.0]  # seen from (0.6, 0): the along wall looks the same
+    tight, still = np.diag([1e-4, 1e-4, 1e-6]), np.zeros(3)
+    weak = test.matched_weak(both, still, scan, normals, tight)
+    assert weak is not None and abs(weak[0]) == pytest.approx(1.0)
+    settled = test.settled(both, still, scan, normals, weak, 1.3)
+    assert settled == pytest.approx([0.6, 0.0, 0.0], abs=0.05 + 1e-9)  # within a cell: trials a cell apart
+    assert test.matched_weak(both, settled, scan, normals, tight) is None
+    one_wall = LikelihoodGrid.from_points(along, 0.05, 0.05, 1.0, np.full(61, -np.pi / 2), np.radians(1.0), 0.5)
+    assert test.settled(one_wall, still, scan, normals, weak, 1.3) is None
+
+
 def test_pace_is_the_median_observed_step_along_the_predicted_travel():
     from radioslam.slam.motion import pace_prediction
 

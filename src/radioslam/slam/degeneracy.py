@@ -18,6 +18,13 @@ Where √(λ_max/λ_min) exceeds ``max_ratio`` — the same bound as for an elon
 covariance, since Σ ∝ J⁻¹ — the match is flagged and remapped (Zhang §IV): its position
 along the weak direction is replaced by the prediction, and that direction's variance
 by the prediction's.
+
+J counts the points that agree with the map at the match, so a match misplaced along a
+direction makes that direction weak by itself: the walls facing along it (an end wall ahead)
+disagree and drop out, while the points on the walls parallel to it, scored point to point,
+land on the previous scan's at a zero step. Before remapping, :meth:`DegeneracyTest.settled`
+slides the match along the weak direction to where the walls facing along it agree best;
+where the match there is no longer degenerate, the direction was never weak.
 """
 
 from __future__ import annotations
@@ -28,6 +35,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.refine import fit_scores
 from radioslam.slam.se2 import rotation, transform_points
 
 
@@ -55,6 +63,21 @@ class DegeneracyTest:
                      covariance: np.ndarray) -> np.ndarray | None:
         agree = agreeing(grid, pose, points, normals, self.inlier_sigmas)
         return self.weak(points[agree], normals[agree], pose[2], covariance)
+
+    def settled(self, grid: LikelihoodGrid, pose: np.ndarray, points: np.ndarray, normals: np.ndarray,
+                weak: np.ndarray, span: float) -> np.ndarray | None:
+        """``pose`` slid along the world direction ``weak`` (unit, 2) within ±``span`` to where the points
+        whose specular normals face along it (within 45°: they measure the offset along it, point to
+        plane) fit the map best, on the grid's cells; None without such points, or where that is where
+        it is."""
+        facing = np.abs(np.cos(normals + pose[2] - np.arctan2(weak[1], weak[0]))) >= np.sqrt(0.5)  # NaN: not
+        if not facing.any():
+            return None
+        slide = grid.resolution * np.arange(-np.ceil(span / grid.resolution), np.ceil(span / grid.resolution) + 1)
+        trials = pose + slide[:, None] * np.array([weak[0], weak[1], 0.0])
+        fit = fit_scores(grid, points[facing], normals[facing], trials)
+        best = int(np.argmax(fit))
+        return None if fit[best] <= fit[len(slide) // 2] else trials[best]  # the middle trial: ``pose``
 
 
 def agreeing(grid: LikelihoodGrid, pose: np.ndarray, points: np.ndarray, normals: np.ndarray,

@@ -155,6 +155,9 @@ class FrontEnd:
             rivals, undecided = (self._across(r, pose, weak) for r in (rivals, undecided))
         status, note = ScanStatus.MATCHED, ""
         if weak is not None:
+            # a direction the match made weak itself: the walls facing along it agree elsewhere on it
+            pose, cov, weak, note = self._settle(grid, pose, cov, points, weak)
+        if weak is not None:
             # a direction the walls cannot fix keeps the paced prediction there (Zhang et al. 2016)
             pose, cov = remap(pose, cov, self.motion.paced(primary, last), weak, self.motion_cfg.predicted_sigma_m)
             status = ScanStatus.DEGENERATE
@@ -179,6 +182,25 @@ class FrontEnd:
                                                      f"{np.degrees(wrap_angle(pose[2] - primary[2])):.0f}° from the "
                                                      "motion's prediction, which stays a rival"]))
         return Step(pose, cov, status, score, rivals, note, contradicted)
+
+    def _settle(self, grid: LikelihoodGrid, pose: np.ndarray, cov: np.ndarray, points: ScanPoints,
+                weak: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, str]:
+        """A degenerate match slid along its weak direction to where the walls facing along it fit
+        (:meth:`DegeneracyTest.settled`), with the covariance there, when it is no longer degenerate
+        there; else the match as it was."""
+        cfg, xy, phi = self.cfg, points.xy, points.normals
+        settled = self.degeneracy.settled(grid, pose, xy, phi, weak, self.motion_cfg.max_step_m)
+        if settled is None:
+            return pose, cov, weak, ""
+        settled = refine_poses(grid, xy, phi, settled, self.grid_cfg.resolution_m, self.step_rad)[0]
+        match = correlative_match(grid, xy, phi, settled, cfg.window_m, np.radians(cfg.window_deg), self.step_rad)
+        settled_cov = match.covariance + self.floor
+        if self.degeneracy.matched_weak(grid, settled, xy, phi, settled_cov) is not None:
+            return pose, cov, weak, ""
+        dx, dy = settled[:2] - pose[:2]
+        note = (f"moved {np.hypot(dx, dy):.2f} m toward {np.degrees(np.arctan2(dy, dx)):.0f}° by the walls facing "
+                "that way (the match had slid along the others)")
+        return settled, settled_cov, None, note
 
     def _contenders(self, candidates: np.ndarray, scores: np.ndarray, adjusted: np.ndarray) -> np.ndarray:
         """The distinct candidates (C, 3; lattice ``scores`` (C,) and the motion prior's ``adjusted`` ones) that
