@@ -305,8 +305,13 @@ def test_a_match_slid_along_its_walls_is_settled_by_the_wall_facing_along_them()
     settled = test.settled(both, still, scan, normals, weak, 1.3)
     assert settled == pytest.approx([0.6, 0.0, 0.0], abs=0.05 + 1e-9)  # within a cell: trials a cell apart
     assert test.matched_weak(both, settled, scan, normals, tight) is None
+    # standing still is no rival of the settled match: the across wall's points tell them apart; a turned
+    # rival they do not judge, and without the across wall in the map nothing tells standing still apart
+    rivals = np.array([still, settled + [0.0, 0.0, 0.5]])
+    assert test.told_apart(both, settled, scan, normals, rivals, 0.08, np.radians(6.0)).tolist() == [True, False]
     one_wall = LikelihoodGrid.from_points(along, 0.05, 0.05, 1.0, np.full(61, -np.pi / 2), np.radians(1.0), 0.5)
     assert test.settled(one_wall, still, scan, normals, weak, 1.3) is None
+    assert test.told_apart(one_wall, settled, scan, normals, rivals[:1], 0.08, np.radians(6.0)).tolist() == [False]
 
 
 def test_pace_is_the_median_observed_step_along_the_predicted_travel():

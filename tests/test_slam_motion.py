@@ -71,13 +71,14 @@ def test_a_walk_along_walls_is_not_mistaken_for_standing_still():
     the previous scan's at a zero step. The match stood still, the end walls it faces then disagreed
     and dropped out of the degeneracy test, and the zero step was kept as 'degenerate' for nine scans
     (ATE 2.92 m, silent). Slid along its weak direction to where the walls facing along it fit, the
-    match is not degenerate, and every step is the walk's."""
+    match is not degenerate, and every step is the walk's. Standing still is no rival either: the
+    walls facing along the walk fit there far worse (scans 2–7 were marked ambiguous for it)."""
     import dataclasses
 
     case = generate_case(RoomKind.RECTANGLE, MotionKind.FIXED, 2031)
     scene = dataclasses.replace(case.scene, poses=case.scene.poses[:12])
     result = RadioSlam().run(sensed(scene, case.seed))
-    assert ScanStatus.DEGENERATE not in result.status
+    assert all(s is ScanStatus.MATCHED for s in result.status)
     assert ate_rmse(result.poses, scene.poses) <= 0.05
     steps = np.linalg.norm(np.diff(result.poses[:, :2], axis=0), axis=1)
     true_steps = np.linalg.norm(np.diff(scene.poses[:, :2], axis=0), axis=1)

@@ -36,7 +36,7 @@ from scipy.spatial import cKDTree
 
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.refine import fit_scores
-from radioslam.slam.se2 import rotation, transform_points
+from radioslam.slam.se2 import rotation, transform_points, wrap_angle
 
 
 @dataclass(frozen=True)
@@ -70,7 +70,7 @@ class DegeneracyTest:
         whose specular normals face along it (within 45°: they measure the offset along it, point to
         plane) fit the map best, on the grid's cells; None without such points, or where that is where
         it is."""
-        facing = np.abs(np.cos(normals + pose[2] - np.arctan2(weak[1], weak[0]))) >= np.sqrt(0.5)  # NaN: not
+        facing = facing_along(normals, pose[2], weak)
         if not facing.any():
             return None
         slide = grid.resolution * np.arange(-np.ceil(span / grid.resolution), np.ceil(span / grid.resolution) + 1)
@@ -78,6 +78,28 @@ class DegeneracyTest:
         fit = fit_scores(grid, points[facing], normals[facing], trials)
         best = int(np.argmax(fit))
         return None if fit[best] <= fit[len(slide) // 2] else trials[best]  # the middle trial: ``pose``
+
+
+    def told_apart(self, grid: LikelihoodGrid, pose: np.ndarray, points: np.ndarray, normals: np.ndarray,
+                   rivals: np.ndarray, margin: float, turn: float) -> np.ndarray:
+        """Mask (R,) of the ``rivals`` (R, 3) slid from ``pose`` (turned less than ``turn``) that the points
+        facing along the slide tell apart: they fit there less than (1 − ``margin``) as well as at
+        ``pose`` (the whole scan's ambiguity margin, applied to the points that see the slide). A step
+        along walls whose other points land on the previous scan's at a zero step is no rival."""
+        apart = np.zeros(len(rivals), dtype=bool)
+        for r, rival in enumerate(rivals):  # a handful
+            slide = rival[:2] - pose[:2]
+            facing = facing_along(normals, pose[2], slide)
+            if abs(wrap_angle(rival[2] - pose[2])) < turn and facing.any():
+                fit = fit_scores(grid, points[facing], normals[facing], np.array([pose, rival]))
+                apart[r] = fit[1] < (1.0 - margin) * fit[0]
+        return apart
+
+
+def facing_along(normals: np.ndarray, heading: float, direction: np.ndarray) -> np.ndarray:
+    """Mask (P,) of the points whose specular normals (terminal frame, NaN: none) at ``heading`` lie
+    within 45° of ±``direction`` (world): they measure an offset along it, point to plane."""
+    return np.abs(np.cos(normals + heading - np.arctan2(direction[1], direction[0]))) >= np.sqrt(0.5)
 
 
 def agreeing(grid: LikelihoodGrid, pose: np.ndarray, points: np.ndarray, normals: np.ndarray,

@@ -157,6 +157,9 @@ class FrontEnd:
         if weak is not None:
             # a direction the match made weak itself: the walls facing along it agree elsewhere on it
             pose, cov, weak, note = self._settle(grid, pose, cov, points, weak)
+        # a slide the walls facing along it tell apart is no rival (the others' points land alike)
+        rivals, undecided = (r[~self.degeneracy.told_apart(grid, pose, xy, phi, r, cfg.ambiguity_margin,
+                                                           np.radians(cfg.distinct_deg))] for r in (rivals, undecided))
         if weak is not None:
             # a direction the walls cannot fix keeps the paced prediction there (Zhang et al. 2016)
             pose, cov = remap(pose, cov, self.motion.paced(primary, last), weak, self.motion_cfg.predicted_sigma_m)
