@@ -28,7 +28,7 @@ import scipy.signal as ss
 from radioslam.scene import load_scene
 from radioslam.sensing import Receiver, Refinement, SensingConfig
 from radioslam.sensing.bisection import neighbour_values
-from radioslam.sensing.detect import local_maxima, strongest
+from radioslam.sensing.detect import leakage_cancelled, local_maxima, strongest
 from radioslam.sensing.profile import RangeSpectrum, pdp_spectrum, signed_lag
 from radioslam.sensing.refiner import PeakRefiner
 from radioslam.sim import Simulator
@@ -71,8 +71,7 @@ def echo_peaks(spec: RangeSpectrum, receiver: Receiver, offset: np.ndarray, canc
     around them (R, 1, 3), for the beams that have one."""
     gate = receiver.range_gate(offset)
     if cancel:
-        leak = np.nan_to_num(gate.leakage)[:, None]
-        spec = spec.minus(spec.path_spectrum(leak, spec.at(leak)))
+        spec = leakage_cancelled(spec, gate)
     profile = spec.profile()
     power = np.abs(profile) ** 2
     peaks, ok = strongest(power, local_maxima(power) & gate.mask(spec.fft_size), 1)

@@ -196,6 +196,13 @@ def _with_leakage(spec: RangeSpectrum, gate: LagGate, slots: int):
     return lag, amp, present, fixed
 
 
+def leakage_cancelled(spec: RangeSpectrum, gate: LagGate) -> RangeSpectrum:
+    """The spectrum with the leakage, estimated at its known lag, subtracted: what :func:`pdp_peaks`
+    searches."""
+    lag, amp, _, _ = _with_leakage(spec, gate, 0)
+    return spec.minus(spec.path_spectrum(np.nan_to_num(lag), amp))
+
+
 def pdp_peaks(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner: PeakRefiner,
               contenders_db: float | None = None):
     """Leakage estimated and cancelled, then the K̂ largest local maxima in the gate that clear
