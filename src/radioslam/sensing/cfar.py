@@ -14,7 +14,6 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 from scipy.optimize import brentq
 
 from radioslam.sensing.config import CfarKind
@@ -43,19 +42,23 @@ def os_alpha(n: int, k: int, pfa: float) -> float:
     return float(brentq(excess, 1e-9, 1e9))
 
 
-def training_cells(power: np.ndarray, guard: int, train: int) -> np.ndarray:
-    """(B, N, 2·train) training cells of every cell of a circular profile (B, N)."""
-    reach = guard + train
-    wrapped = np.concatenate([power[:, -reach:], power, power[:, :reach]], axis=1)
-    windows = sliding_window_view(wrapped, 2 * reach + 1, axis=1)  # (B, N, 2·reach + 1)
-    return np.concatenate([windows[..., :train], windows[..., -train:]], axis=-1)
+def training_cells(power: np.ndarray, rows: np.ndarray, cols: np.ndarray, guard: int, train: int) -> np.ndarray:
+    """(C, 2·train) training cells of the cells (rows, cols) (C,) of a circular profile (B, N): ``train``
+    on each side beyond ``guard``, the lower side first."""
+    offsets = np.concatenate([np.arange(-guard - train, -guard), np.arange(guard + 1, guard + train + 1)])
+    return power[rows[:, None], (cols[:, None] + offsets) % power.shape[1]]
 
 
-def cfar_threshold(power: np.ndarray, kind: CfarKind, guard: int, train: int, pfa: float) -> np.ndarray:
-    """Detection threshold (B, N) for ``power`` (B, N)."""
-    cells = training_cells(power, guard, train)
-    n = cells.shape[-1]
+def cfar_threshold(power: np.ndarray, kind: CfarKind, guard: int, train: int, pfa: float,
+                   cells: np.ndarray | None = None) -> np.ndarray:
+    """Detection threshold for ``power`` (B, N): (B, N), or (C,) at the ``cells`` (C, 2) (row, column)
+    given (the candidates only: a threshold per cell costs 2·train reads)."""
+    rows, cols = np.indices(power.shape).reshape(2, -1) if cells is None else cells.T
+    training = training_cells(power, rows, cols, guard, train)
+    n = training.shape[-1]
     if kind is CfarKind.CA:
-        return ca_alpha(n, pfa) * cells.mean(axis=-1)
-    k = int(np.ceil(0.75 * n))
-    return os_alpha(n, k, pfa) * np.partition(cells, k - 1, axis=-1)[..., k - 1]
+        threshold = ca_alpha(n, pfa) * training.mean(axis=-1)
+    else:
+        k = int(np.ceil(0.75 * n))
+        threshold = os_alpha(n, k, pfa) * np.partition(training, k - 1, axis=-1)[..., k - 1]
+    return threshold.reshape(power.shape) if cells is None else threshold

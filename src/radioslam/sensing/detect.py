@@ -142,18 +142,20 @@ def polish(spec: RangeSpectrum, lag: np.ndarray, present: np.ndarray, fixed: np.
     movable = present & ~fixed[None, :]
     w = 2j * np.pi * spec.p / spec.fft_size
     eye = np.eye(lag.shape[1])[None]
-    for _ in range(iterations):
+    model, inv_m = spec.model[:, None, :], 1.0 / spec.model[:, None, :]  # (B, 1, P)
+    for _ in range(iterations):  # sums over subcarriers as batched products (B, M, P) @ (B, P, ·)
         amp = joint_amplitudes(spec, lag, present)
         e = phase_ramp(np.nan_to_num(lag), spec.p, spec.fft_size) * present[..., None]
-        resid = spec.s - np.einsum("bk,bp,bkp->bp", amp, spec.model, e)
-        d = amp[..., None] * spec.model[:, None, :] * e * (-w)  # ∂(model)/∂t_k
+        resid = spec.s - (amp[:, None, :] @ e)[:, 0] * spec.model  # S − Σ_k a_k m e_k
+        d = amp[..., None] * model * e * (-w)  # ∂(model)/∂t_k
         # project out the amplitudes' span (Kaufman's variable-projection Jacobian)
-        gram = np.einsum("bip,bp,bjp->bij", e.conj(), spec.model, e) + eye * (~present)[:, :, None]
-        coef = np.linalg.solve(_ridge(gram), np.einsum("bip,bjp->bij", e.conj(), d))  # (B, M_cols, M_derivs)
-        d = d - np.einsum("bp,bip,bij->bjp", spec.model, e, coef)
-        inv_m = 1.0 / spec.model
-        hess = np.einsum("bip,bp,bjp->bij", d.conj(), inv_m, d).real
-        grad = np.einsum("bip,bp,bp->bi", d.conj(), inv_m, resid).real
+        e_conj = e.conj()
+        gram = (e_conj * model) @ e.transpose(0, 2, 1) + eye * (~present)[:, :, None]  # Σ_p e_i* m e_j
+        coef = np.linalg.solve(_ridge(gram), e_conj @ d.transpose(0, 2, 1))  # (B, M_cols, M_derivs)
+        d = d - (coef.transpose(0, 2, 1) @ e) * model
+        weighted = d.conj() * inv_m  # d_i* / m
+        hess = (weighted @ d.transpose(0, 2, 1)).real
+        grad = (weighted @ resid[..., None])[..., 0].real
         hess = hess * movable[:, :, None] * movable[:, None, :] + eye * (~movable)[:, :, None]
         step = np.linalg.solve(_ridge(hess), (grad * movable)[..., None])[..., 0]
         lag = np.where(movable, lag + np.clip(step, -0.25, 0.25), lag)
@@ -253,9 +255,12 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
         resid = spec.minus(spec.path_spectrum(np.nan_to_num(lag), np.where(present, amp, 0.0)))
         profile = resid.profile()
         power = np.abs(profile) ** 2
-        threshold = np.maximum(cfar_threshold(power, cfg.cfar, cfg.cfar_guard, cfg.cfar_train, cfg.cfar_pfa),
-                               noise_threshold(power, cfg.noise_pfa))
-        peaks, ok = strongest(power, local_maxima(power) & allowed_lags & (power > threshold), 1)
+        # CFAR only where it can matter: the local maxima in the gate above the noise threshold
+        candidate = local_maxima(power) & allowed_lags & (power > noise_threshold(power, cfg.noise_pfa))
+        cells = np.argwhere(candidate)
+        cfar = cfar_threshold(power, cfg.cfar, cfg.cfar_guard, cfg.cfar_train, cfg.cfar_pfa, cells)
+        candidate[tuple(cells[power[tuple(cells.T)] <= cfar].T)] = False
+        peaks, ok = strongest(power, candidate, 1)
         searching &= ok[:, 0]
         if not searching.any():
             break
