@@ -80,9 +80,11 @@ class BlockedSpectrum:
         self.coarse = p0 + self.block * np.arange(n_blocks)
         self.period = period
 
-    def __call__(self, shifts: np.ndarray) -> np.ndarray:
+    def __call__(self, shifts: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
+        """The sums at ``shifts`` (B, K), or of the ``rows`` (R,) only at ``shifts`` (R, K)."""
+        blocks = self.blocks if rows is None else self.blocks[rows]
         w = (2j * np.pi / self.period) * np.asarray(shifts, dtype=np.float64)[..., None]  # (B, K, 1)
-        inner = (self.blocks @ np.exp(w * np.arange(self.block))[..., None])[..., 0]  # (B, K, A)
+        inner = (blocks @ np.exp(w * np.arange(self.block))[..., None])[..., 0]  # (B, K, A)
         return np.einsum("bka,bka->bk", inner, np.exp(w * self.coarse))
 
 

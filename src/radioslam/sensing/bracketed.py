@@ -64,21 +64,23 @@ def safeguarded_newton(spec: RangeSpectrum, start: np.ndarray, half_width: float
     from ``start``: the lags, F there and the DFT evaluations spent. Stops once every row's last
     step is below ``precision`` / 4 samples, or after ``max_steps``."""
     low, high, lag = start - half_width, start + half_width, start.astype(np.float64).copy()
-    spent = 0
-    for _ in range(max_steps):
-        f, d1, d2 = spec.with_derivatives(lag[:, None])[..., 0]
-        spent += 3 * len(lag)
+    spent, active = 0, np.arange(len(lag))  # the rows still moving: a row stops once its step is below
+    for _ in range(max_steps):  # precision / 4, and only the others are evaluated again
+        at = lag[active]
+        f, d1, d2 = spec.with_derivatives(at[:, None], active)[..., 0]
+        spent += 3 * len(active)
         slope = np.real(np.conj(f) * d1)  # ½ d|F|²/dt
         curvature = np.abs(d1) ** 2 + np.real(np.conj(f) * d2)  # ½ d²|F|²/dt²
-        low, high = np.where(slope > 0, lag, low), np.where(slope > 0, high, lag)  # the maximum lies uphill
+        lo, hi = np.where(slope > 0, at, low[active]), np.where(slope > 0, high[active], at)  # the maximum lies uphill
         with np.errstate(divide="ignore", invalid="ignore"):
-            newton = lag - slope / curvature
-        inside = (curvature < 0) & (newton >= low) & (newton <= high)
-        moved = np.where(inside, newton, 0.5 * (low + high))
-        step, lag = np.abs(moved - lag), moved
-        if step.max() < precision / 4:
+            newton = at - slope / curvature
+        inside = (curvature < 0) & (newton >= lo) & (newton <= hi)
+        moved = np.where(inside, newton, 0.5 * (lo + hi))
+        low[active], high[active], lag[active] = lo, hi, moved
+        active = active[np.abs(moved - at) >= precision / 4]
+        if not len(active):
             break
-    value = spec.at(lag[:, None])[:, 0]
+    value = spec.at_via_derivatives(lag[:, None])[:, 0]
     return lag, value, spent + len(lag)
 
 

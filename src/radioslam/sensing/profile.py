@@ -69,11 +69,19 @@ class RangeSpectrum:
         jw = 2j * np.pi * self.p / self.fft_size
         return BlockedSpectrum(np.concatenate([self.s, self.s * jw, self.s * jw**2]), self.p, self.fft_size)
 
-    def with_derivatives(self, lags: np.ndarray) -> np.ndarray:
-        """F, dF/dt and d²F/dt² at fractional lags (B, K): (3, B, K), in one blocked evaluation."""
+    def at_via_derivatives(self, lags: np.ndarray) -> np.ndarray:
+        """:meth:`at`, through the evaluator of :meth:`with_derivatives` (its F rows): no second
+        evaluator set up where that one is already built."""
+        return self._derivative_sums(lags, np.arange(self.s.shape[0])) / self.scale[:, None]
+
+    def with_derivatives(self, lags: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
+        """F, dF/dt and d²F/dt² at fractional lags (B, K): (3, B, K), in one blocked evaluation; with
+        ``rows`` (R,), of those rows only, at lags (R, K): (3, R, K)."""
         b = self.s.shape[0]
-        values = self._derivative_sums(np.tile(lags, (3, 1))) / np.tile(self.scale, 3)[:, None]
-        return values.reshape(3, b, -1)
+        rows = np.arange(b) if rows is None else np.asarray(rows)
+        stacked = np.concatenate([rows, rows + b, rows + 2 * b])  # F, F′ and F″ of each row
+        values = self._derivative_sums(np.tile(lags, (3, 1)), stacked) / self.scale[stacked % b][:, None]
+        return values.reshape(3, len(rows), -1)
 
     def kernel(self, lags: np.ndarray) -> np.ndarray:
         """Σ_p model(p)·e^{j2πpt/N} at lags (B, K): the response at lag t of a path at lag 0,
