@@ -68,8 +68,8 @@ class DegeneracyTest:
                 weak: np.ndarray, span: float) -> np.ndarray | None:
         """``pose`` slid along the world direction ``weak`` (unit, 2) within ±``span`` to where the points
         whose specular normals face along it (within 45°: they measure the offset along it, point to
-        plane) fit the map best, on the grid's cells; None without such points, or where that is where
-        it is."""
+        plane) fit the map best, on the grid's cells; None without such points, or when they fit best
+        where the match already is."""
         facing = facing_along(normals, pose[2], weak)
         if not facing.any():
             return None
@@ -78,7 +78,6 @@ class DegeneracyTest:
         fit = fit_scores(grid, points[facing], normals[facing], trials)
         best = int(np.argmax(fit))
         return None if fit[best] <= fit[len(slide) // 2] else trials[best]  # the middle trial: ``pose``
-
 
     def told_apart(self, grid: LikelihoodGrid, pose: np.ndarray, points: np.ndarray, normals: np.ndarray,
                    rivals: np.ndarray, margin: float, turn: float) -> np.ndarray:
