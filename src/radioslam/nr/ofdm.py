@@ -80,8 +80,9 @@ class BlockedSpectrum:
         self.coarse = p0 + self.block * np.arange(n_blocks)
         self.period = period
 
-    def __call__(self, shifts: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
-        """The sums at ``shifts`` (B, K), or of the ``rows`` (R,) only at ``shifts`` (R, K)."""
+    def __call__(self, shifts: np.ndarray, rows: np.ndarray | slice | None = None) -> np.ndarray:
+        """The sums at ``shifts`` (B, K), or of the ``rows`` (an index (R,) or a slice) only at ``shifts``
+        (R, K); None and slices read the blocks in place, an index array gathers a copy."""
         blocks = self.blocks if rows is None else self.blocks[rows]
         w = (2j * np.pi / self.period) * np.asarray(shifts, dtype=np.float64)[..., None]  # (B, K, 1)
         inner = (blocks @ np.exp(w * np.arange(self.block))[..., None])[..., 0]  # (B, K, A)

@@ -67,7 +67,7 @@ def safeguarded_newton(spec: RangeSpectrum, start: np.ndarray, half_width: float
     spent, active = 0, np.arange(len(lag))  # the rows still moving: a row stops once its step is below
     for _ in range(max_steps):  # precision / 4, and only the others are evaluated again
         at = lag[active]
-        f, d1, d2 = spec.with_derivatives(at[:, None], active)[..., 0]
+        f, d1, d2 = spec.with_derivatives(at[:, None], None if len(active) == len(lag) else active)[..., 0]
         spent += 3 * len(active)
         slope = np.real(np.conj(f) * d1)  # ½ d|F|²/dt
         curvature = np.abs(d1) ** 2 + np.real(np.conj(f) * d2)  # ½ d²|F|²/dt²

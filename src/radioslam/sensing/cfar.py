@@ -50,10 +50,10 @@ def training_cells(power: np.ndarray, rows: np.ndarray, cols: np.ndarray, guard:
 
 
 def cfar_threshold(power: np.ndarray, kind: CfarKind, guard: int, train: int, pfa: float,
-                   cells: np.ndarray | None = None) -> np.ndarray:
-    """Detection threshold for ``power`` (B, N): (B, N), or (C,) at the ``cells`` (C, 2) (row, column)
-    given (the candidates only: a threshold per cell costs 2·train reads)."""
-    rows, cols = np.indices(power.shape).reshape(2, -1) if cells is None else cells.T
+                   cells: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """Detection threshold for ``power`` (B, N): (B, N), or (C,) at the ``cells`` (rows, columns), each
+    (C,), given (the candidates only: a threshold per cell costs 2·train reads)."""
+    rows, cols = np.indices(power.shape).reshape(2, -1) if cells is None else cells
     training = training_cells(power, rows, cols, guard, train)
     n = training.shape[-1]
     if kind is CfarKind.CA:

@@ -257,9 +257,9 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
         power = np.abs(profile) ** 2
         # CFAR only where it can matter: the local maxima in the gate above the noise threshold
         candidate = local_maxima(power) & allowed_lags & (power > noise_threshold(power, cfg.noise_pfa))
-        cells = np.argwhere(candidate)
-        cfar = cfar_threshold(power, cfg.cfar, cfg.cfar_guard, cfg.cfar_train, cfg.cfar_pfa, cells)
-        candidate[tuple(cells[power[tuple(cells.T)] <= cfar].T)] = False
+        cells = np.nonzero(candidate)
+        candidate[cells] = power[cells] > cfar_threshold(power, cfg.cfar, cfg.cfar_guard, cfg.cfar_train,
+                                                         cfg.cfar_pfa, cells)
         peaks, ok = strongest(power, candidate, 1)
         searching &= ok[:, 0]
         if not searching.any():

@@ -72,13 +72,16 @@ class RangeSpectrum:
     def at_via_derivatives(self, lags: np.ndarray) -> np.ndarray:
         """:meth:`at`, through the evaluator of :meth:`with_derivatives` (its F rows): no second
         evaluator set up where that one is already built."""
-        return self._derivative_sums(lags, np.arange(self.s.shape[0])) / self.scale[:, None]
+        return self._derivative_sums(lags, slice(0, self.s.shape[0])) / self.scale[:, None]
 
     def with_derivatives(self, lags: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
         """F, dF/dt and d²F/dt² at fractional lags (B, K): (3, B, K), in one blocked evaluation; with
         ``rows`` (R,), of those rows only, at lags (R, K): (3, R, K)."""
         b = self.s.shape[0]
-        rows = np.arange(b) if rows is None else np.asarray(rows)
+        if rows is None:  # every row: the stacked blocks as they are, no gather
+            values = self._derivative_sums(np.tile(lags, (3, 1))) / np.tile(self.scale, 3)[:, None]
+            return values.reshape(3, b, -1)
+        rows = np.asarray(rows)
         stacked = np.concatenate([rows, rows + b, rows + 2 * b])  # F, F′ and F″ of each row
         values = self._derivative_sums(np.tile(lags, (3, 1)), stacked) / self.scale[stacked % b][:, None]
         return values.reshape(3, len(rows), -1)
