@@ -66,10 +66,10 @@ def zoomfft(spec: RangeSpectrum, centre: np.ndarray, points: int) -> np.ndarray:
     return start + 2.0 * best / (points - 1)
 
 
-def echo_peaks(spec: RangeSpectrum, receiver: Receiver, offset: np.ndarray, cancel: bool):
+def echo_peaks(spec: RangeSpectrum, receiver: Receiver, capture, offset: np.ndarray, cancel: bool):
     """The spectrum searched (leakage cancelled or raw), its strongest in-gate echo peaks (R,) and F
     around them (R, 1, 3), for the beams that have one."""
-    gate = receiver.range_gate(offset)
+    gate = receiver.range_gate(capture, offset)
     if cancel:
         spec = leakage_cancelled(spec, gate)
     profile = spec.profile()
@@ -112,10 +112,11 @@ def main() -> None:
         cell = receiver.cell_m
         refiners = {m: PeakRefiner.from_config(SensingConfig(refine=Refinement(m)), cell) for m in methods[:2]}
         for pose in np.linspace(0, len(scene.poses) - 1, args.poses).astype(int):
-            _, _, est = receiver.front_end(simulator.simulate_pose(int(pose), np.random.default_rng(int(pose))))
+            capture = simulator.simulate_pose(int(pose), np.random.default_rng(int(pose)))
+            _, _, est = receiver.front_end(capture)
             spec = pdp_spectrum(est, receiver.p, receiver.n)
             for cancel in (True, False):
-                sub, peaks, values = echo_peaks(spec, receiver, est.window_offset, cancel)
+                sub, peaks, values = echo_peaks(spec, receiver, capture, est.window_offset, cancel)
                 lags, magnitude = zoom(sub, peaks[:, 0].astype(float), REFERENCE_POINTS)
                 reference = lags[np.arange(len(lags)), np.argmax(magnitude, axis=1)]
                 for m in methods:

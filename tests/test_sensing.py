@@ -52,7 +52,9 @@ def test_sync_finds_thousands_of_samples_of_hardware_delay():
     _, cap = plate_capture(4.0, hardware_delay_s=50e-6)
     sync = coarse_sync(cap)
     assert sync.found.all()
-    assert abs(sync.t1_samples[0] - 50e-6 * FS) <= 2 + 4.0 * 2 / SPEED_OF_LIGHT * FS
+    # within one step of the 4-sample sync grid of the arrivals' span (the leakage at T_H, the plate 3.3
+    # samples later): the two add in the correlation's 8-sample main lobe, so its peak may sit beyond both
+    assert -4 <= sync.t1_samples[0] - 50e-6 * FS <= 4 + 4.0 * 2 / SPEED_OF_LIGHT * FS
 
 
 def test_grid_and_waveform_modes_give_the_same_range():

@@ -109,9 +109,11 @@ def calibrate(
     spacing: Optional[float] = typer.Option(None, "--spacing", min=0.05, help="target spacing, m (default 0.8)"),
     captures: Optional[Path] = typer.Option(None, "--captures", help="directory of recorded target captures"),
     ranges: Optional[str] = typer.Option(None, "--ranges", help="their ranges, m, comma separated, in file order"),
+    empty: Optional[Path] = typer.Option(None, "--empty", help="a recorded capture of every beam with nothing in "
+                                         "range: measures the TX→RX leakage (with --captures)"),
     seed: int = typer.Option(0, "--seed", min=0, help="seed of the simulated measurements"),
 ) -> None:
-    """Estimate the hardware delay T_H from targets at known ranges, eq. (11)."""
+    """Estimate the hardware delay T_H from targets at known ranges, eq. (11), and the leakage of every beam."""
     from radioslam.config import RadioConfig
     from radioslam.io import read_capture, write_calibration
     from radioslam.pipeline import calibrate_simulated
@@ -124,9 +126,12 @@ def calibrate(
     else:
         files = _capture_files(captures)
         values = _parse_ranges(ranges, len(files))
-        cal = estimate_hardware_delay([read_capture(f) for f in files], values, source=f"recorded: {captures}")
+        cal = estimate_hardware_delay([read_capture(f) for f in files], values, source=f"recorded: {captures}",
+                                      empty=None if empty is None else read_capture(empty))
         write_calibration(out, cal)
-    err.print(f"T_H = {cal.hardware_delay_s * 1e6:.6f} µs from {len(cal.targets)} targets → {out}", markup=False)
+    leakage = "no leakage measured" if cal.leakage is None else f"leakage of {len(cal.leakage.delay_s)} beams"
+    err.print(f"T_H = {cal.hardware_delay_s * 1e6:.6f} µs from {len(cal.targets)} targets, {leakage} → {out}",
+              markup=False)
 
 
 def _capture_files(directory: Path) -> list[Path]:
@@ -204,7 +209,7 @@ def sense(
         task = bar.add_task("sensing", total=len(files))
         for f in files:
             capture = read_capture(f)
-            receiver = receiver or Receiver(capture.radio, cal.hardware_delay_s, cfg)
+            receiver = receiver or Receiver(capture.radio, cal.hardware_delay_s, cfg, cal.leakage)
             result = receiver.sense(capture)
             write_scan(run.scan_file(capture.pose_index), result.scan, comment=f"pose {capture.pose_index}")
             if capture.pose_index == plot_pose:

@@ -34,6 +34,13 @@ class DataMode(str, Enum):
     IDENTICAL = "identical"  # the same 16-QAM symbol repeated R times
 
 
+class LeakageCoupling(str, Enum):
+    """How the TX→RX leakage differs between beams (its mean power is the radio's isolation)."""
+
+    ARRAYS = "arrays"  # the free-space coupling of the two steered, stacked arrays: 22 dB broadside-to-edge
+    UNIFORM = "uniform"  # the same on every beam (one isolation figure; the model before issue #13)
+
+
 class Impairments(BaseModel):
     """Hardware impairments of the simulated front end (issue #13), each off by default; their physics
     in :mod:`radioslam.sim.impairments`. I/Q imbalance and the ADC act on the waveform (waveform mode)."""
@@ -52,10 +59,20 @@ class Impairments(BaseModel):
     # the hardware delay's change between calibration (eq. (11)) and use: every sensing capture's T_H is
     # hardware_delay_s + this, the calibration plates' hardware_delay_s
     hardware_delay_drift_s: float = Field(0.0, ge=-1e-6, le=1e-6)
+    # the TX→RX leakage's change between its calibration (a capture with nothing in range) and use: a gain
+    # and a phase on every beam's coupling (temperature, the PA's and LNA's operating point)
+    leakage_drift_db: float = Field(0.0, ge=-6.0, le=6.0)
+    leakage_drift_deg: float = Field(0.0, ge=-180.0, le=180.0)
 
     def at_calibration(self) -> "Impairments":
         """The same hardware when it was calibrated: no drift yet."""
-        return self.model_copy(update={"hardware_delay_drift_s": 0.0})
+        return self.model_copy(update={"hardware_delay_drift_s": 0.0, "leakage_drift_db": 0.0,
+                                       "leakage_drift_deg": 0.0})
+
+    @property
+    def leakage_drift(self) -> complex:
+        """The factor on every beam's leakage since calibration."""
+        return complex(10.0 ** (self.leakage_drift_db / 20.0) * np.exp(1j * np.radians(self.leakage_drift_deg)))
 
     @property
     def time_domain(self) -> bool:
@@ -83,8 +100,12 @@ class RadioConfig(BaseModel):
     data: DataMode = DataMode.DIFFERENT
     snr_db: float = 10.0  # ★ per-RE SNR of the reference echo (DESIGN.md §2)
     hardware_delay_s: float = Field(32e-6, ge=0, le=1e-3)
-    isolation_db: float = 70.0  # TX→RX beam-space isolation: leakage ≈ the 5 m reference echo
+    isolation_db: float = 70.0  # TX→RX isolation, mean over the beams: leakage ≈ the 5 m reference echo
     array_baseline_m: float = Field(0.05, ge=0, le=1.0)  # TX/RX array centre spacing
+    # the coupling path's delay beyond b/c (feed lines, a reflection inside the housing): the receiver
+    # does not assume it, it measures the leakage's delay per beam at calibration
+    leakage_excess_delay_s: float = Field(0.0, ge=-5e-9, le=5e-9)
+    leakage_coupling: LeakageCoupling = LeakageCoupling.ARRAYS
     element_exponent: float = Field(1.0, ge=0)  # element power pattern cos^q(θ)
     ray_spacing_deg: float = Field(0.25, gt=0, le=2.0)
     max_range_m: float = Field(40.0, gt=0)

@@ -25,7 +25,7 @@ from radioslam.scene import load_scene, scene_to_yaml
 from radioslam.sensing import Receiver, SensingConfig, estimate_hardware_delay
 from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import Simulator
-from radioslam.sim.calibration_targets import calibration_ranges, simulate_calibration_captures
+from radioslam.sim.calibration_targets import calibration_ranges, simulate_calibration
 from radioslam.sim.odometry import odometry_rng, simulated_odometry
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, SlamResult
 from radioslam.slam.occupancy import occupancy_grid
@@ -35,10 +35,12 @@ SIMULATED_ODOMETRY = "simulated"  # run --odometry simulated: the scene's own dr
 
 
 def calibrate_simulated(radio, out: Path, seed: int, targets: int | None = None, spacing: float | None = None):
-    """eq. (11) on metal plates simulated with this radio; writes ``calibration.json``."""
+    """eq. (11) on metal plates simulated with this radio, and the leakage of a sweep with nothing in
+    range; writes ``calibration.json``."""
     ranges = calibration_ranges(radio, targets, spacing)
-    captures = simulate_calibration_captures(radio, ranges, seed)
-    cal = estimate_hardware_delay(captures, ranges, source=f"simulated: {len(ranges)} metal plates, seed {seed}")
+    captures, empty = simulate_calibration(radio, ranges, seed)
+    cal = estimate_hardware_delay(captures, ranges, source=f"simulated: {len(ranges)} metal plates and an empty "
+                                  f"sweep, seed {seed}", empty=empty)
     write_calibration(out, cal)
     return cal
 
@@ -71,7 +73,7 @@ def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | No
     tick = time.perf_counter()
     scene, run, cal = prepare_run(scene_name, out, seed, snr_db)
     timings["calibrate"] = time.perf_counter() - tick
-    receiver = Receiver(scene.radio, cal.hardware_delay_s, sensing)
+    receiver = Receiver(scene.radio, cal.hardware_delay_s, sensing, cal.leakage)
     simulate_s = sense_s = 0.0
     captures = Simulator.from_scene(scene).simulate(seed)
     for index in range(len(scene.poses)):

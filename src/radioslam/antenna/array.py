@@ -28,3 +28,13 @@ def array_response(weights: np.ndarray, vartheta: np.ndarray) -> np.ndarray:
     weights = np.atleast_2d(weights)
     a = steering_vector(vartheta, weights.shape[-1])
     return np.tensordot(weights.conj(), a, axes=([-1], [-1]))
+
+
+def stacked_coupling(n_elements: int, baseline_wavelengths: float, spacing_wavelengths: float = 0.5) -> np.ndarray:
+    """Free-space coupling C (N, N) from element n of one ULA to element m of a parallel ULA stacked
+    ``baseline_wavelengths`` away: C[m, n] = (b/d_mn)·e^{−j2π d_mn/λ}, d_mn = √(b² + ((m − n)·d)²), i.e.
+    point elements with spherical spreading, normalized to 1 across the baseline (b/d) (a first-order
+    model of array mutual coupling, e.g. Balanis, *Antenna Theory*, §8.7; a real housing adds paths)."""
+    offset = (np.arange(n_elements)[:, None] - np.arange(n_elements)[None, :]) * spacing_wavelengths
+    distance = np.sqrt(baseline_wavelengths**2 + offset**2)
+    return baseline_wavelengths / distance * np.exp(-2j * np.pi * distance)

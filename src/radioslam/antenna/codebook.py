@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from radioslam.antenna.array import array_response, spatial_frequency, steering_vector
-from radioslam.config import Impairments, RadioConfig
+from radioslam.antenna.array import array_response, spatial_frequency, stacked_coupling, steering_vector
+from radioslam.config import Impairments, LeakageCoupling, RadioConfig
 
 
 def dft_codebook(n_elements: int, bits: int, indices: np.ndarray) -> np.ndarray:
@@ -59,11 +59,14 @@ class BeamSet:
     orientations: int
     element_exponent: float = 1.0
     element_response: tuple[tuple[complex, ...], ...] | None = None  # (TX, RX) per element; None: ideal
+    baseline_wavelengths: float = 0.0  # TX/RX array centre spacing b/λ (0: no coupling model)
 
     @classmethod
     def from_config(cls, radio: RadioConfig) -> "BeamSet":
         return cls(radio.array_elements, radio.codebook_bits, radio.beams_per_side, radio.orientations,
-                   radio.element_exponent, element_responses(radio.impairments, radio.array_elements))
+                   radio.element_exponent, element_responses(radio.impairments, radio.array_elements),
+                   radio.array_baseline_m / radio.wavelength_m if radio.leakage_coupling is LeakageCoupling.ARRAYS
+                   else 0.0)
 
     @property
     def codebook_indices(self) -> np.ndarray:
@@ -104,6 +107,21 @@ class BeamSet:
 
     def weights(self) -> np.ndarray:
         return dft_codebook(self.n_elements, self.bits, self.index)
+
+    def coupling(self) -> np.ndarray:
+        """Complex TX→RX leakage (B,) of each beam between the stacked TX and RX arrays, relative to its
+        mean power over the ideal codebook: L_i = (w̄_i∘e_R)^T C (w̄_i∘e_T) with the coupling C of
+        :func:`~radioslam.antenna.array.stacked_coupling` (both arrays steered by w_i, as in
+        :meth:`two_way_gain`). Broadside beams couple most (18 dB above the edge beams at b = 4.7λ)."""
+        if self.baseline_wavelengths <= 0.0:
+            return np.ones(len(self), dtype=np.complex128)
+        c = stacked_coupling(self.n_elements, self.baseline_wavelengths)
+        w = self.weights().conj()
+        ideal = np.einsum("bm,mn,bn->b", w, c, w)
+        if self.element_response is None:
+            return ideal / np.sqrt(np.mean(np.abs(ideal) ** 2))
+        tx, rx = map(np.array, self.element_response)
+        return np.einsum("bm,mn,bn->b", w * rx, c, w * tx) / np.sqrt(np.mean(np.abs(ideal) ** 2))
 
     def two_way_gain(self, theta_terminal: np.ndarray) -> np.ndarray:
         """Amplitude gain (B, P) of every beam towards paths at terminal-frame angles (P,).

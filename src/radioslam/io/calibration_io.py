@@ -8,6 +8,7 @@ from pathlib import Path
 from radioslam.io.atomic import atomic_write_text
 from radioslam.io.errors import CalibrationFileError
 from radioslam.sensing.calibration import Calibration, CalibrationTarget
+from radioslam.sensing.leakage import LeakageModel
 
 
 def write_calibration(path: str | Path, calibration: Calibration) -> None:
@@ -31,4 +32,11 @@ def read_calibration(path: str | Path) -> Calibration:
                    for t in doc.get("targets", [])]
     except (KeyError, TypeError, ValueError) as exc:
         raise CalibrationFileError(f"malformed target: {exc}", file=path, field="targets") from None
-    return Calibration(float(delay), targets, str(doc.get("source", "")))
+    leakage = None
+    if doc.get("leakage") is not None:
+        try:
+            leakage = LeakageModel.from_dict(doc["leakage"])
+        except ValueError as exc:
+            field, _, reason = str(exc).partition(": ")
+            raise CalibrationFileError(reason, file=path, field=field) from None
+    return Calibration(float(delay), targets, str(doc.get("source", "")), leakage)

@@ -5,11 +5,17 @@ and T2 (the refined OFDM offset within the sync grid) on the beam facing it, and
 
     T_H = (1/N_T) Σ_k (T1⁽ᵏ⁾ + T2⁽ᵏ⁾ − T_O⁽ᵏ⁾),   T_O⁽ᵏ⁾ = 2√(R_k² + b²/4)/c.      (11)
 
-Before T_H is known nothing separates a target from the TX→RX leakage, so the
-estimate is made in two passes: (1) the strongest refined peak of every target
-gives a robust first guess (the median of T1 + T2 − T_O); (2) each target is then
+Before T_H is known nothing in one capture separates a target from the TX→RX leakage,
+so the estimate is made in two passes: (1) the K̂ strongest refined peaks of every
+target each propose T1 + T2 − T_O; the targets' echoes agree on one value, the
+leakage (which does not move with the target) proposes a different one for each,
+so the value most targets agree on is the first guess; (2) each target is then
 re-detected in a ±1.5-cell gate around T_H + T_O with the leakage (at T_H + b/c)
 estimated and cancelled jointly, and (11) is evaluated on those.
+
+With a capture of every beam with nothing in range, the leakage is measured first
+(:func:`measure_leakage`: its absolute delay and amplitude per beam), cancelled at that
+delay in pass 2, and stored relative to T_H (:class:`~radioslam.sensing.leakage.LeakageModel`).
 """
 
 from __future__ import annotations
@@ -22,7 +28,10 @@ from radioslam.antenna.codebook import nearest_beam_row
 from radioslam.capture import Capture
 from radioslam.config import bistatic_delay_s
 from radioslam.sensing.config import SensingConfig
+from radioslam.sensing.detect import detect_single
 from radioslam.sensing.errors import SensingError
+from radioslam.sensing.leakage import LeakageModel
+from radioslam.sensing.profile import pdp_spectrum
 from radioslam.sensing.receiver import Receiver
 
 GATE_CELLS = 1.5
@@ -48,17 +57,40 @@ class Calibration:
     hardware_delay_s: float
     targets: list[CalibrationTarget] = field(default_factory=list)
     source: str = ""
+    leakage: LeakageModel | None = None
 
     def to_dict(self) -> dict:
-        return {"method": "eq. (11), arXiv 2507.04662", "hardware_delay_s": self.hardware_delay_s,
-                "source": self.source,
-                "targets": [{"range_m": t.range_m, "t1_s": t.t1_s, "t2_s": t.t2_s, "ota_s": t.ota_s,
-                             "bias_s": t.bias_s} for t in self.targets]}
+        doc = {"method": "eq. (11), arXiv 2507.04662", "hardware_delay_s": self.hardware_delay_s,
+               "source": self.source,
+               "targets": [{"range_m": t.range_m, "t1_s": t.t1_s, "t2_s": t.t2_s, "ota_s": t.ota_s,
+                            "bias_s": t.bias_s} for t in self.targets]}
+        if self.leakage is not None:
+            doc["leakage"] = self.leakage.to_dict()
+        return doc
+
+
+def measure_leakage(capture: Capture, cfg: SensingConfig | None = None) -> LeakageModel:
+    """The leakage of every beam of a capture with nothing in range, before T_H is known: each beam's
+    strongest echo anywhere in the FFT window, refined. ``delay_s`` is absolute (T1 + T2) here."""
+    receiver = Receiver(capture.radio, None, cfg)
+    t1, found, est = receiver.front_end(capture)
+    if not found.all():
+        raise SensingError(f"no leakage on {int((~found).sum())} beams: is the receiver on?", file=capture.source,
+                           field="leakage capture")
+    offset = est.window_offset
+    half = receiver.n / 2 / receiver.fs
+    gate = receiver.gate(capture, offset, offset / receiver.fs - half, offset / receiver.fs + half)
+    det = detect_single(pdp_spectrum(est, receiver.p, receiver.n), gate, receiver.cfg, receiver.refiner)
+    if not det.valid[:, 0].all():
+        raise SensingError("a beam without a refined leakage peak", file=capture.source, field="leakage capture")
+    return LeakageModel(capture.orientation.copy(), capture.beam_index.copy(), (offset + det.lag[:, 0]) / receiver.fs,
+                        det.amplitude[:, 0])
 
 
 def estimate_hardware_delay(captures: list[Capture], ranges_m: np.ndarray, cfg: SensingConfig | None = None,
-                            source: str = "") -> Calibration:
-    """Eq. (11) over targets on the array normal, one capture per target."""
+                            source: str = "", empty: Capture | None = None) -> Calibration:
+    """Eq. (11) over targets on the array normal, one capture per target; with ``empty``, a capture of
+    every beam with nothing in range, the leakage measured first and calibrated too."""
     cfg = cfg or SensingConfig()
     ranges_m = np.asarray(ranges_m, dtype=np.float64)
     if len(captures) != len(ranges_m) or len(captures) == 0:
@@ -67,12 +99,14 @@ def estimate_hardware_delay(captures: list[Capture], ranges_m: np.ndarray, cfg: 
     ota = bistatic_delay_s(ranges_m, radio.array_baseline_m)
     half_gate = GATE_CELLS / radio.sample_rate_hz
     rows = [nearest_beam_row(cap.beam_angle_rad, 0.0) for cap in captures]  # the beams facing the targets
-    # pass 1: the strongest peak of each target, no gate and no leakage model
-    blind = Receiver(radio, None, cfg)
-    guess = float(np.median([sum(blind.beam_delay(cap, row)) - t_o for cap, row, t_o in zip(captures, rows, ota)]))
-    # pass 2 (twice): gate around T_H + T_O, leakage at T_H + b/c cancelled jointly
+    leakage = None if empty is None else measure_leakage(empty, cfg)  # absolute delays: T_H = 0 for them
+    # pass 1: the value of T1 + T2 − T_O most targets' peaks agree on (the leakage cancelled where measured)
+    blind = Receiver(radio, None if leakage is None else 0.0, cfg, leakage)
+    guess = consensus([blind.beam_peaks(cap, row) - t_o for cap, row, t_o in zip(captures, rows, ota)],
+                      0.5 / radio.sample_rate_hz)
+    # pass 2 (twice): gate around T_H + T_O, leakage (at its measured delay, or T_H + b/c) cancelled jointly
     for _ in range(2):
-        receiver = Receiver(radio, guess, cfg)
+        receiver = Receiver(radio, guess, cfg, _after(leakage, guess))
         targets = []
         for cap, row, r, t_o in zip(captures, rows, ranges_m, ota):
             t1, t2 = receiver.beam_delay(cap, row, (guess + t_o - half_gate, guess + t_o + half_gate))
@@ -81,4 +115,28 @@ def estimate_hardware_delay(captures: list[Capture], ranges_m: np.ndarray, cfg: 
                                    field=f"target {r:g} m")
             targets.append(CalibrationTarget(float(r), t1, t2, float(t_o)))
         guess = float(np.mean([t.bias_s for t in targets]))  # eq. (11)
-    return Calibration(guess, targets, source)
+    return Calibration(guess, targets, source, _after(leakage, guess))
+
+
+def consensus(proposals: list[np.ndarray], tolerance: float) -> float:
+    """The value most of the proposal sets (one per target, NaN: none) have a member within
+    ``tolerance`` of: the median, over those sets, of each one's nearest member (ties: the
+    tighter cluster)."""
+    sets = [p[np.isfinite(p)] for p in proposals]
+    candidates = np.concatenate(sets) if any(len(p) for p in sets) else np.zeros(0)
+    if len(candidates) == 0:
+        raise SensingError("no echo on any calibration target", field="targets")
+    nearest = np.array([[np.min(np.abs(p - c)) if len(p) else np.inf for p in sets] for c in candidates])
+    support = (nearest <= tolerance).sum(axis=1)
+    spread = np.where(nearest <= tolerance, nearest, 0.0).sum(axis=1)
+    best = np.lexsort((spread, -support))[0]
+    agreeing = [p[np.argmin(np.abs(p - candidates[best]))] for p in sets if len(p)
+                and np.min(np.abs(p - candidates[best])) <= tolerance]
+    return float(np.median(agreeing))
+
+
+def _after(leakage: LeakageModel | None, hardware_delay_s: float) -> LeakageModel | None:
+    """The measured leakage with its delays made relative to T_H."""
+    if leakage is None:
+        return None
+    return LeakageModel(leakage.orientation, leakage.beam_index, leakage.delay_s - hardware_delay_s, leakage.amplitude)

@@ -46,6 +46,14 @@ class Refinement(str, Enum):
     PAPER_BISECTION = "paper-bisection"  # the paper's fractional-IFFT bisection (§III-A), to reproduce it
 
 
+# the range gate's default: with the leakage's lag measured at calibration the gate stops where the
+# arrays' far field starts (2D²/λ = 0.26 m for 8 elements at 28 GHz) with margin, and a target 0.41
+# sample from the leakage is estimated jointly with it; without, the leakage is assumed at b/c and a
+# lag error would leave a residual within a cell of it, so the gate keeps clear of that cell
+NEAR_GATE_M = 0.5
+FAR_GATE_M = 1.5
+
+
 class SensingConfig(BaseModel):
     """Every receiver parameter. Defaults follow the paper; ranges in metres."""
 
@@ -57,7 +65,10 @@ class SensingConfig(BaseModel):
     precision_m: float = Field(0.001, gt=0)  # refinement stops at this range precision
     max_iterations: int = Field(20, ge=0, le=40)  # refinement steps at most
     decimation: int = Field(4, ge=1, le=16)  # PSS synchronization rate f_s/4 (§III-C)
-    min_range_m: float = Field(1.5, ge=0)  # gate: the TX→RX leakage is never a target
+    min_range_m: float | None = Field(None, ge=0)  # gate; None: NEAR_GATE_M with a calibrated leakage, else FAR
+    # what cancelling the leakage may leave, relative to it (a lag 0.02 sample off leaves −30 dB): the
+    # residual's profile at this level joins the detection threshold, so it never becomes a target
+    leakage_residual_db: float = Field(-30.0, le=0)
     max_range_m: float | None = Field(None, gt=0)  # None: the radio's max_range_m
     noise_pfa: float = Field(1e-6, gt=0, lt=1)  # a peak must clear the noise floor at this Pfa
     point_threshold_db: float | None = Field(None, le=0)  # None: the radio's (−13 dB, §IV-A) for single,

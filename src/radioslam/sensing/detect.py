@@ -2,9 +2,11 @@
 
 * Gate: only lags whose range lies in [min_range, max_range] after the calibrated
   hardware delay can be targets, so the TX→RX leakage at range ≈ 0 never is.
-* Leakage cancellation: the leakage sits at a known lag (calibrated T_H plus the
-  array baseline b/c); its amplitude is estimated there and subtracted before the
-  search, so its range sidelobes are not reported either.
+* Leakage cancellation: the leakage sits at a known lag (calibrated T_H plus its own
+  calibrated delay, :mod:`radioslam.sensing.leakage`, or b/c); its amplitude is estimated
+  there, jointly with the targets, and subtracted before the search, so its range
+  sidelobes are not reported either; what a slightly wrong lag would leave joins the
+  detection threshold (``leakage_residual_db`` below the leakage's own profile).
 * Single (the paper's): the K̂ largest local maxima in the gate that clear the noise
   floor are refined (T2, :mod:`radioslam.sensing.refiner`); the strongest is the beam's target.
 * Multi: CFAR on the residual profile, then successive cancellation: the strongest
@@ -198,6 +200,13 @@ def _with_leakage(spec: RangeSpectrum, gate: LagGate, slots: int):
     return lag, amp, present, fixed
 
 
+def residual_floor(spec: RangeSpectrum, leakage: np.ndarray, residual_db: float) -> np.ndarray:
+    """(B, N) what cancelling the leakage (its spectrum ``leakage``, (B, n_sc)) may leave at each lag:
+    its profile's power, ``residual_db`` below it."""
+    profile = RangeSpectrum(leakage, spec.model, spec.p, spec.fft_size).profile()
+    return 10.0 ** (residual_db / 10.0) * np.abs(profile) ** 2
+
+
 def leakage_cancelled(spec: RangeSpectrum, gate: LagGate) -> RangeSpectrum:
     """The spectrum with the leakage, estimated at its known lag, subtracted: what :func:`pdp_peaks`
     searches."""
@@ -215,12 +224,13 @@ def pdp_peaks(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner: P
     refined peak is wanted, since refinement recovers at most the straddle loss.
     """
     lag, amp, present, fixed = _with_leakage(spec, gate, 1)
-    resid = spec.minus(spec.path_spectrum(np.nan_to_num(lag[:, :1]), amp[:, :1]))
+    leakage = spec.path_spectrum(np.nan_to_num(lag[:, :1]), amp[:, :1])
+    resid = spec.minus(leakage)
     profile = resid.profile()
     power = np.abs(profile) ** 2
     n = spec.fft_size
-    peaks, ok = strongest(power, local_maxima(power) & gate.mask(n) & (power > noise_threshold(power, cfg.noise_pfa)),
-                          cfg.peaks)
+    floor = noise_threshold(power, cfg.noise_pfa) + residual_floor(spec, leakage, cfg.leakage_residual_db)
+    peaks, ok = strongest(power, local_maxima(power) & gate.mask(n) & (power > floor), cfg.peaks)
     active = ok
     if contenders_db is not None:
         peak_power = np.take_along_axis(power, peaks, axis=1)
@@ -249,6 +259,8 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
     lag, amp, present, fixed = _with_leakage(spec, gate, m)
     n, rows = spec.fft_size, np.arange(spec.s.shape[0])
     allowed_lags = gate.mask(n)
+    leakage_floor = residual_floor(spec, spec.path_spectrum(np.nan_to_num(lag[:, :1]), amp[:, :1]),
+                                   cfg.leakage_residual_db)
     searching = np.ones(len(rows), dtype=bool)
     spent = 0
     for slot in range(1, m + 1):
@@ -256,7 +268,7 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
         profile = resid.profile()
         power = np.abs(profile) ** 2
         # CFAR only where it can matter: the local maxima in the gate above the noise threshold
-        candidate = local_maxima(power) & allowed_lags & (power > noise_threshold(power, cfg.noise_pfa))
+        candidate = local_maxima(power) & allowed_lags & (power > noise_threshold(power, cfg.noise_pfa) + leakage_floor)
         cells = np.nonzero(candidate)
         candidate[cells] = power[cells] > cfar_threshold(power, cfg.cfar, cfg.cfar_guard, cfg.cfar_train,
                                                          cfg.cfar_pfa, cells)

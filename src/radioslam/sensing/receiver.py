@@ -15,10 +15,11 @@ import numpy as np
 from radioslam.capture import Capture, CaptureMode
 from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
 from radioslam.nr.numerology import Numerology
-from radioslam.sensing.config import Detector, PointFilter, SensingConfig
-from radioslam.sensing.detect import Detections, LagGate, detect_multi, detect_single
+from radioslam.sensing.config import FAR_GATE_M, NEAR_GATE_M, Detector, PointFilter, SensingConfig
+from radioslam.sensing.detect import Detections, LagGate, detect_multi, detect_single, pdp_peaks
 from radioslam.sensing.errors import SensingError
 from radioslam.sensing.estimate import ChannelEstimate, estimate_channel
+from radioslam.sensing.leakage import LeakageModel
 from radioslam.sensing.pointcloud import Scan, build_scan
 from radioslam.sensing.profile import RangeSpectrum, mf_spectrum, pdp_spectrum, signed_lag
 from radioslam.sensing.refiner import PeakRefiner
@@ -57,10 +58,13 @@ class SensingResult:
 
 
 class Receiver:
-    """Built from the radio, the calibrated hardware delay (None: not yet known) and settings."""
+    """Built from the radio, the calibrated hardware delay (None: not yet known), settings and the
+    calibrated leakage (None: assumed at b/c after the hardware delay)."""
 
-    def __init__(self, radio: RadioConfig, hardware_delay_s: float | None, cfg: SensingConfig | None = None):
+    def __init__(self, radio: RadioConfig, hardware_delay_s: float | None, cfg: SensingConfig | None = None,
+                 leakage: LeakageModel | None = None):
         self.radio, self.hardware_delay_s, self.cfg = radio, hardware_delay_s, cfg or SensingConfig()
+        self.leakage = leakage
         num = Numerology.from_config(radio)
         self.fs, self.n, self.p = num.sample_rate_hz, num.fft_size, num.subcarrier_indices()
         self.cell_m = SPEED_OF_LIGHT / (2.0 * self.fs)  # 1.22 m per sample
@@ -87,17 +91,29 @@ class Receiver:
         offset = sync.t1_samples if grid else sync.t1_samples - self.backoff
         return sync.t1_samples, sync.found, estimate_channel(capture, offset)
 
-    def gate(self, offset: np.ndarray, low_s: np.ndarray, high_s: np.ndarray) -> LagGate:
+    def leakage_delay_s(self, capture: Capture) -> np.ndarray:
+        """(B,) the leakage's delay after T_H on each beam: calibrated, or b/c."""
+        if self.leakage is None:
+            return np.full(len(capture.beam_index), self.radio.array_baseline_m / SPEED_OF_LIGHT)
+        return self.leakage.delay_s[self.leakage.rows_of(capture.orientation, capture.beam_index, capture.source)]
+
+    def gate(self, capture: Capture, offset: np.ndarray, low_s: np.ndarray, high_s: np.ndarray) -> LagGate:
         leak = (np.full(len(offset), np.nan) if self.hardware_delay_s is None else
-                (self.hardware_delay_s + self.radio.array_baseline_m / SPEED_OF_LIGHT) * self.fs - offset)
+                (self.hardware_delay_s + self.leakage_delay_s(capture)) * self.fs - offset)
         return LagGate(low_s * self.fs - offset, high_s * self.fs - offset, leak)
 
-    def range_gate(self, offset: np.ndarray) -> LagGate:
+    @property
+    def min_range_m(self) -> float:
+        if self.cfg.min_range_m is not None:
+            return self.cfg.min_range_m
+        return FAR_GATE_M if self.leakage is None else NEAR_GATE_M
+
+    def range_gate(self, capture: Capture, offset: np.ndarray) -> LagGate:
         """Lags of ranges in [min_range, max_range] after the calibrated hardware delay."""
         far = self.cfg.max_range_m or self.radio.max_range_m
-        t_lo, t_hi = (self.hardware_delay_s + bistatic_delay_s(np.array([self.cfg.min_range_m, far]),
+        t_lo, t_hi = (self.hardware_delay_s + bistatic_delay_s(np.array([self.min_range_m, far]),
                                                                 self.radio.array_baseline_m))
-        return self.gate(offset, np.full(len(offset), t_lo), np.full(len(offset), t_hi))
+        return self.gate(capture, offset, np.full(len(offset), t_lo), np.full(len(offset), t_hi))
 
     def detect(self, spec: RangeSpectrum, gate: LagGate) -> Detections:
         run = detect_multi if self.cfg.detector is Detector.MULTI else detect_single
@@ -125,7 +141,7 @@ class Receiver:
         # 3. range profile: PDP of Ĥ (single target) or MF with coherent integration (multi)
         spec = self.spectrum(est)
         # 4. detection in the range gate, leakage cancelled, peaks refined (T2: bracketed, or the paper's bisection)
-        det = self.detect(spec, self.range_gate(est.window_offset))
+        det = self.detect(spec, self.range_gate(capture, est.window_offset))
         valid = det.valid & found[:, None]
         delay = (est.window_offset[:, None] + det.lag) / self.fs
         rng = np.where(valid, self.to_range(np.nan_to_num(delay)), np.nan)
@@ -136,17 +152,29 @@ class Receiver:
         return SensingResult(scan, t1 / self.fs, delay, rng, power, valid, det.dft_evaluations, spec,
                              est.window_offset, self)
 
+    def _beam_profile(self, capture: Capture, row: int, window_s: tuple[float, float] | None):
+        """T1 (1,) samples, the window offset (1,), the PDP spectrum and the gate of one beam."""
+        one = capture.select([row])
+        t1, _, est = self.front_end(one)
+        offset = est.window_offset
+        low, high = ((offset - self.n / 2) / self.fs, (offset + self.n / 2) / self.fs) if window_s is None else (
+            np.array([window_s[0]]), np.array([window_s[1]]))
+        return t1, offset, pdp_spectrum(est, self.p, self.n), self.gate(one, offset, low, high)
+
     def beam_delay(self, capture: Capture, row: int, window_s: tuple[float, float] | None = None):
         """(T1, T2) in seconds of the strongest PDP echo on one beam (calibration, eq. (11)).
 
         ``window_s`` bounds T1 + T2 (default: every lag of the FFT window); the leakage is
         cancelled when the hardware delay is known. T2 is NaN when nothing is found.
         """
-        t1, _, est = self.front_end(capture.select([row]))
-        offset = est.window_offset
-        low, high = ((offset - self.n / 2) / self.fs, (offset + self.n / 2) / self.fs) if window_s is None else (
-            np.array([window_s[0]]), np.array([window_s[1]]))
-        det = detect_single(pdp_spectrum(est, self.p, self.n), self.gate(offset, low, high), self.cfg,
-                            self.refiner)
+        t1, offset, spec, gate = self._beam_profile(capture, row, window_s)
+        det = detect_single(spec, gate, self.cfg, self.refiner)
         t2 = (offset[0] + det.lag[0, 0] - t1[0]) / self.fs if det.valid[0, 0] else np.nan
         return float(t1[0] / self.fs), float(t2)
+
+    def beam_peaks(self, capture: Capture, row: int) -> np.ndarray:
+        """T1 + T2 in seconds (K̂,) of the K̂ strongest refined PDP peaks of one beam anywhere in its FFT
+        window, leakage cancelled when its delay is known (NaN: fewer peaks)."""
+        _, offset, spec, gate = self._beam_profile(capture, row, None)
+        _, refined, ok = pdp_peaks(spec, gate, self.cfg, self.refiner)
+        return np.where(ok[0], (offset[0] + refined.lag[0]) / self.fs, np.nan)

@@ -1,5 +1,6 @@
 """Simulated calibration measurements for eq. (11): a 1 m² metal plate on the array normal at
-N_T known ranges (0.8 m, 1.6 m, … by default), as in the paper's §V-A procedure."""
+N_T known ranges (0.8 m, 1.6 m, … by default), as in the paper's §V-A procedure; and a sweep of
+every beam with nothing in range, which measures the TX→RX leakage."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import numpy as np
 from radioslam.capture import Capture, CaptureMode
 from radioslam.config import RadioConfig
 from radioslam.scene.builtin import single_plate
+from radioslam.sim.paths import leakage_paths
 from radioslam.sim.simulator import Simulator
 
 
@@ -40,3 +42,18 @@ def simulate_calibration_captures(radio: RadioConfig, ranges_m: np.ndarray, seed
         simulator = plate_simulator(radio, r, mode, calibrating=True)
         captures.append(simulator.simulate_pose(0, np.random.default_rng(child)))
     return captures
+
+
+def simulate_empty_capture(radio: RadioConfig, rng: np.random.Generator,
+                           mode: CaptureMode = CaptureMode.WAVEFORM) -> Capture:
+    """Every beam of ``radio``, as calibrated (no drift yet), with nothing in range: the leakage alone."""
+    calibrated = radio.model_copy(update={"impairments": radio.impairments.at_calibration()})
+    return Simulator.from_radio(calibrated, mode).capture_from_paths(leakage_paths(calibrated), rng)
+
+
+def simulate_calibration(radio: RadioConfig, ranges_m: np.ndarray, seed: int,
+                         mode: CaptureMode = CaptureMode.WAVEFORM) -> tuple[list[Capture], Capture]:
+    """The plates' captures (target k from child k of ``seed``) and the empty sweep (the next child)."""
+    captures = simulate_calibration_captures(radio, ranges_m, seed, mode)
+    empty_stream = np.random.SeedSequence(seed).spawn(len(ranges_m) + 1)[-1]
+    return captures, simulate_empty_capture(radio, np.random.default_rng(empty_stream), mode)

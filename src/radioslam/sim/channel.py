@@ -19,9 +19,11 @@ def delay_phasors(delays_s: np.ndarray, subcarriers: np.ndarray, spacing_hz: flo
 
 
 def beam_path_gains(beams: BeamSet, paths: EchoPaths) -> np.ndarray:
-    """Complex gain ϖ_{i,k}·b_k of every path on every beam, shape (B, P)."""
+    """Complex gain ϖ_{i,k}·b_k of every path on every beam, shape (B, P); the leakage's ϖ is the
+    beam's TX→RX coupling (:meth:`~radioslam.antenna.codebook.BeamSet.coupling`)."""
     leak = paths.kind == PathKind.LEAKAGE
-    gain = np.ones((len(beams), len(paths)))
+    gain = np.empty((len(beams), len(paths)), dtype=np.complex128)
+    gain[:, leak] = beams.coupling()[:, None]
     gain[:, ~leak] = beams.two_way_gain(paths.angle[~leak])
     return gain * paths.amplitude[None, :]
 

@@ -12,8 +12,9 @@ Gains (complex amplitudes relative to the transmitted signal, before beam gain):
   specular, one per wall whose foot of perpendicular from the terminal lies on it
   (image source, normal incidence):
       b = λ/(4π·2r) · Γ·√(1 − S²) · ΠT² · e^{−j2π f_c τ};
-  leakage, the full-duplex TX→RX coupling at τ = b/c, amplitude 10^(−isolation/20),
-      the same on every beam (beam-space isolation).
+  leakage, the full-duplex TX→RX coupling at τ = b/c (plus the radio's excess delay of the
+      coupling path), amplitude 10^(−isolation/20) times the drift since calibration; its gain
+      on each beam is the coupling between the two steered arrays (mean power 1 over the beams).
 ΠT² is the two-way transmission through the walls crossed before the hit.
 """
 
@@ -106,10 +107,22 @@ def echo_paths(scene: Scene, pose: np.ndarray, radio: RadioConfig | None = None,
     parts = [diffuse_paths(scene, pose, radio), specular_paths(scene, pose, radio)]
     kinds = [np.full(len(p[0]), k) for p, k in zip(parts, (PathKind.DIFFUSE, PathKind.SPECULAR))]
     if leakage and np.isfinite(radio.isolation_db):
-        leak = (np.array([radio.array_baseline_m / SPEED_OF_LIGHT]),
-                np.array([10.0 ** (-radio.isolation_db / 20.0) + 0j]), np.array([np.nan]),
-                np.array([-1]), np.full((1, 2), np.nan))
-        parts.append(leak)
+        parts.append(_leakage(radio))
         kinds.append(np.array([PathKind.LEAKAGE]))
+    return _joined(parts, kinds)
+
+
+def _leakage(radio: RadioConfig):
+    return (np.array([radio.array_baseline_m / SPEED_OF_LIGHT + radio.leakage_excess_delay_s]),
+            np.array([10.0 ** (-radio.isolation_db / 20.0) * radio.impairments.leakage_drift]), np.array([np.nan]),
+            np.array([-1]), np.full((1, 2), np.nan))
+
+
+def _joined(parts, kinds) -> EchoPaths:
     tau, amp, ang, seg, pt = (np.concatenate(x) for x in zip(*parts))
     return EchoPaths(tau, amp.astype(np.complex128), ang, np.concatenate(kinds).astype(np.int8), seg, pt)
+
+
+def leakage_paths(radio: RadioConfig) -> EchoPaths:
+    """The leakage alone: a capture with nothing in range, what its calibration measures."""
+    return _joined([_leakage(radio)], [np.array([PathKind.LEAKAGE])])

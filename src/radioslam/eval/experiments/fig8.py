@@ -80,7 +80,7 @@ def pdp_detections(receiver: Receiver, cap) -> np.ndarray:
     """Refined PDP peaks of the beam within −13 dB of its strongest (ranges, m)."""
     _, _, est = receiver.front_end(cap)
     spec = pdp_spectrum(est, receiver.p, receiver.n)
-    _, refined, ok = pdp_peaks(spec, receiver.range_gate(est.window_offset), receiver.cfg, receiver.refiner)
+    _, refined, ok = pdp_peaks(spec, receiver.range_gate(cap, est.window_offset), receiver.cfg, receiver.refiner)
     power = np.where(ok, np.abs(refined.amplitude) ** 2, 0.0)[0]
     keep = ok[0] & (power >= power.max() * 10 ** (PDP_FLOOR_DB / 10))
     delay = (est.window_offset[0] + refined.lag[0][keep]) / receiver.fs
