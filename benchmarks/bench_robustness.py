@@ -29,9 +29,10 @@ import numpy as np
 from bench_stability import perturbed
 
 from radioslam.eval.trajectory_metrics import ate_rmse
+from radioslam.pipeline import calibrated_receiver
 from radioslam.scene import Scene, scene_to_yaml
 from radioslam.scene.procedural import Case, robustness_suite
-from radioslam.sensing import Receiver, SensingConfig
+from radioslam.sensing import SensingConfig
 from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import Simulator
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, load_slam_config
@@ -41,17 +42,18 @@ SUCCESS_M, LOST_M = 0.2, 1.0
 
 
 def cache_file(scene: Scene, seed: int, cache: Path) -> Path:
-    # the receiver's settings too: scans sensed with another refinement, say, are not these
-    receiver = SensingConfig().model_dump_json()
+    # the receiver's settings too: scans sensed with another refinement, say, are not these; and how it
+    # was calibrated (since issue #13: T_H and the leakage from a simulated calibration, as in a run)
+    receiver = SensingConfig().model_dump_json() + "calibrated T_H and leakage"
     key = hashlib.sha1(scene_to_yaml(scene).encode() + str(seed).encode() + receiver.encode()).hexdigest()[:16]
     return cache / f"{scene.name}-{key}.npz"
 
 
 def cached_scans(scene: Scene, seed: int, cache: Path) -> list[Scan]:
-    """The scene's scans, simulated and sensed once (with the true hardware delay), then from the cache."""
+    """The scene's scans, simulated and sensed once (calibrated as a run is), then from the cache."""
     path = cache_file(scene, seed, cache)
     if not path.exists():
-        receiver = Receiver(scene.radio, scene.radio.hardware_delay_s)
+        receiver = calibrated_receiver(scene.radio, seed)
         scans = [receiver.sense(c).scan for c in Simulator.from_scene(scene).simulate(seed)]
         arrays = {f"{k}_{f}": getattr(s, f) for k, s in enumerate(scans) for f in FIELDS}
         cache.mkdir(parents=True, exist_ok=True)

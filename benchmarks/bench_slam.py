@@ -19,9 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
+from radioslam.pipeline import calibrated_receiver
 from radioslam.scene import load_scene
 from radioslam.scene.procedural import MotionKind, RoomKind, generate_case
-from radioslam.sensing import Receiver
 from radioslam.sim import Simulator
 from radioslam.slam import RadioSlam, front_end
 from radioslam.slam.branch_bound import BranchAndBound
@@ -29,7 +29,7 @@ from radioslam.slam.rotation_search import HeadingSearch
 
 
 def sensed(scene, seed):
-    receiver = Receiver(scene.radio, scene.radio.hardware_delay_s)
+    receiver = calibrated_receiver(scene.radio, seed)
     return [receiver.sense(c).scan for c in Simulator.from_scene(scene).simulate(seed)]
 
 

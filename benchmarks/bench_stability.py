@@ -13,8 +13,8 @@ from dataclasses import replace
 import numpy as np
 
 from radioslam.eval.trajectory_metrics import ate_rmse
+from radioslam.pipeline import calibrated_receiver
 from radioslam.scene import load_scene
-from radioslam.sensing import Receiver
 from radioslam.sim import Simulator
 from radioslam.slam import RadioSlam
 
@@ -35,7 +35,7 @@ def main() -> None:
     print(f"{'scene':16} {'ATE unperturbed':>16} {'min':>8} {'max':>8} {'max − min':>10}  target ≤ 0.010 m")
     for name in args.scenes:
         scene = load_scene(name)
-        receiver = Receiver(scene.radio, scene.radio.hardware_delay_s)
+        receiver = calibrated_receiver(scene.radio, args.seed)
         scans = [receiver.sense(c).scan for c in Simulator.from_scene(scene).simulate(args.seed)]
         base = ate_rmse(RadioSlam().run(scans).poses, scene.poses)
         rng = np.random.default_rng(args.seed)

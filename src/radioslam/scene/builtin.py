@@ -18,8 +18,12 @@ shelf-hall    a 20 m × 16 m hall with two rows of metal shelves (a cross aisle 
               around at the end and comes back 0.8 m to the side, then along the north
               aisle and back the same way.
 
-Both keep the terminal 2 m from every wall: nearer walls fall inside the receiver's
-leakage gate (1.5 m) and only the skirts of their echoes beyond it are seen.
+narrow-corridor a 2.4 m wide corridor around a 11.2 m × 4 m block (two doors into it), walked
+              once around on its centre line: every wall on the sides is 1.2 m away, inside
+              the 1.5 m gate of a receiver whose leakage is not calibrated (issue #13).
+
+corridor-loop and shelf-hall keep the terminal 2 m from every wall: before issue #13 nearer walls
+fell inside the receiver's leakage gate (1.5 m) and only the skirts of their echoes were seen.
 
 The last two were not used to tune anything (issue #4: scenes the SLAM was not tuned on).
 """
@@ -118,6 +122,18 @@ def corridor_loop() -> Scene:
     }, "builtin:corridor-loop")
 
 
+def narrow_corridor() -> Scene:
+    block = _runs([(-5.6, -2.0), (-2.5, -2.0), None, (-1.5, -2.0), (5.6, -2.0), (5.6, 2.0), (1.5, 2.0), None,
+                   (0.5, 2.0), (-5.6, 2.0), (-5.6, -2.0)], "concrete")
+    return scene_from_mapping({
+        "version": 1, "name": "narrow-corridor",
+        "walls": [_wall(_rectangle(-8.0, -4.4, 8.0, 4.4), "concrete"), *block],
+        "trajectory": {"poses": _path([(-6.8, -3.2), (6.8, -3.2), (6.8, 3.2), (-6.8, 3.2), (-6.8, -3.2),
+                                       (0.0, -3.2)])},
+        "radio": {"snr_db": 10.0},
+    }, "builtin:narrow-corridor")
+
+
 def shelf_hall() -> Scene:
     shelves = [_wall(_rectangle(x0, y0, x1, y0 + 0.8), "metal")
                for y0 in (-3.0, 2.2) for x0, x1 in ((-5.5, -0.6), (0.6, 5.5))]
@@ -139,6 +155,7 @@ BUILTIN_SCENES: dict[str, tuple[Callable[..., Scene], str]] = {
     "single-plate": (single_plate, "Table I: 1 m metal plate on the normal; 'single-plate:R' sets R m"),
     "corridor-loop": (corridor_loop, "4 m corridor around a block of rooms, 1.2 laps, rounded corners, ±20 % speed"),
     "shelf-hall": (shelf_hall, "20 m hall, two rows of metal shelves, down and back two aisles"),
+    "narrow-corridor": (narrow_corridor, "2.4 m corridor around a block, walls 1.2 m to each side, one lap"),
 }
 
 

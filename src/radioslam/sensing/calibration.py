@@ -71,20 +71,22 @@ class Calibration:
 
 def measure_leakage(capture: Capture, cfg: SensingConfig | None = None) -> LeakageModel:
     """The leakage of every beam of a capture with nothing in range, before T_H is known: each beam's
-    strongest echo anywhere in the FFT window, refined. ``delay_s`` is absolute (T1 + T2) here."""
+    strongest echo anywhere in the FFT window, refined. ``delay_s`` is absolute (T1 + T2) here. A beam
+    whose leakage is too weak to find (the codebook's edge, at a low SNR) gets the others' median delay
+    and amplitude 0: the receiver still fits whatever is there at that lag."""
     receiver = Receiver(capture.radio, None, cfg)
-    t1, found, est = receiver.front_end(capture)
-    if not found.all():
-        raise SensingError(f"no leakage on {int((~found).sum())} beams: is the receiver on?", file=capture.source,
-                           field="leakage capture")
+    _, _, est = receiver.front_end(capture)  # where a beam's PSS is too weak, its window is the others'
     offset = est.window_offset
     half = receiver.n / 2 / receiver.fs
     gate = receiver.gate(capture, offset, offset / receiver.fs - half, offset / receiver.fs + half)
     det = detect_single(pdp_spectrum(est, receiver.p, receiver.n), gate, receiver.cfg, receiver.refiner)
-    if not det.valid[:, 0].all():
-        raise SensingError("a beam without a refined leakage peak", file=capture.source, field="leakage capture")
-    return LeakageModel(capture.orientation.copy(), capture.beam_index.copy(), (offset + det.lag[:, 0]) / receiver.fs,
-                        det.amplitude[:, 0])
+    seen = det.valid[:, 0]
+    if not seen.any():
+        raise SensingError("no leakage on any beam: is the receiver on?", file=capture.source,
+                           field="leakage capture")
+    delay = (offset + det.lag[:, 0]) / receiver.fs
+    return LeakageModel(capture.orientation.copy(), capture.beam_index.copy(),
+                        np.where(seen, delay, np.median(delay[seen])), np.where(seen, det.amplitude[:, 0], 0.0))
 
 
 def estimate_hardware_delay(captures: list[Capture], ranges_m: np.ndarray, cfg: SensingConfig | None = None,

@@ -53,7 +53,8 @@ class LeakageModel:
 
     def to_dict(self) -> dict:
         return {"method": "strongest echo of a capture with nothing in range, per beam",
-                "orientation": self.orientation.astype(int).tolist(), "beam_index": self.beam_index.astype(int).tolist(),
+                "orientation": self.orientation.astype(int).tolist(),
+                "beam_index": self.beam_index.astype(int).tolist(),
                 "delay_s": self.delay_s.tolist(), "amplitude_re": self.amplitude.real.tolist(),
                 "amplitude_im": self.amplitude.imag.tolist()}
 

@@ -84,12 +84,21 @@ class Receiver:
     def front_end(self, capture: Capture) -> tuple[np.ndarray, np.ndarray, ChannelEstimate]:
         """T1 (B,) samples, whether sync was found, and the channel estimate."""
         self._check(capture)
-        # 1. coarse synchronization on the PSS at f_s/4 (T1)
+        # 1. coarse synchronization on the PSS at f_s/4 (T1); where it is not found, the window goes where
+        #    the leakage is (T_H, once calibrated) or where the other beams found theirs
         sync = coarse_sync(capture, self.cfg.decimation, self.cfg.noise_pfa)
+        t1 = np.where(sync.found, sync.t1_samples, self._t1_fallback(sync))
         # 2. FFT windows inside every echo's cyclic prefix; LS channel estimate combined over R symbols
         grid = capture.mode is CaptureMode.GRID
-        offset = sync.t1_samples if grid else sync.t1_samples - self.backoff
-        return sync.t1_samples, sync.found, estimate_channel(capture, offset)
+        offset = t1 if grid else t1 - self.backoff
+        return t1, sync.found, estimate_channel(capture, offset)
+
+    def _t1_fallback(self, sync) -> int:
+        if self.hardware_delay_s is not None:
+            return int(round(self.hardware_delay_s * self.fs))
+        if sync.found.any():
+            return int(np.median(sync.t1_samples[sync.found]))
+        return 0
 
     def leakage_delay_s(self, capture: Capture) -> np.ndarray:
         """(B,) the leakage's delay after T_H on each beam: calibrated, or b/c."""
