@@ -182,3 +182,79 @@ def test_reproduce_impairments_tabulates_table1_per_profile_and_the_drift_is_the
     assert abs(rows["drift"]["rmse_refined_m"] - bias) < 3e-3
     bad = cli("reproduce", "table1", "--out", str(tmp_path), "--impairments", "bogus")
     assert bad.returncode == 2 and "--impairments" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
+
+
+def _residual_phase(oscillators, linewidth_hz=1e3, range_m=30.0):
+    """angle(r/r₀) of a lone echo with and without phase noise (same data, no noise to speak of), on the
+    received samples whose transmitted sample lies inside a symbol's useful part; and the echo's delay."""
+    from radioslam.eval.point_targets import capture_point_targets, point_paths
+    from radioslam.nr.ofdm import symbol_starts
+    from radioslam.sim import Simulator
+
+    base = RadioConfig(snr_db=300.0)
+    phases = []
+    for width in (0.0, linewidth_hz):
+        radio = base.model_copy(update={"impairments": Impairments(phase_noise_linewidth_hz=width,
+                                                                   oscillators=oscillators)})
+        paths = point_paths(radio, range_m, 0.0, 300.0)
+        capture = capture_point_targets(radio, paths, list(range(radio.beams_per_orientation)),
+                                        np.random.default_rng(7))
+        phases.append(capture.samples.astype(np.complex128))
+    sim = Simulator.from_radio(base, rows=np.arange(base.beams_per_orientation))
+    n = base.fft_size
+    delay = int(round((base.hardware_delay_s + paths.delay_s[0]) * base.sample_rate_hz))
+    starts = symbol_starts(sim.window_cp, n) + sim.window_cp  # (B, L) useful parts from the burst's start
+    u = np.arange(phases[0].shape[1]) - delay  # the transmitted sample behind each received one
+    inside = ((u[None, None, :] >= starts[..., None] + 32) & (u[None, None, :] < starts[..., None] + n - 32)).any(axis=1)
+    ratio = phases[1] / phases[0]
+    return np.angle(ratio[inside]), paths.delay_s[0]
+
+
+def test_with_one_lo_the_phase_noise_left_on_an_echo_has_the_variance_two_pi_linewidth_times_its_delay():
+    """φ(t − τ) − φ(t) of a Wiener LO: 2π·Δf·τ (1.26·10⁻³ rad² for 1 kHz and 30 m), whatever the capture's
+    length; two separate LOs wander by far more over the same samples."""
+    from radioslam.config import Oscillators
+
+    residual, tau = _residual_phase(Oscillators.SHARED)
+    assert np.var(residual) == pytest.approx(2 * np.pi * 1e3 * tau, rel=0.1)
+    separate, _ = _residual_phase(Oscillators.SEPARATE)
+    assert np.var(separate) > 20 * np.var(residual)
+
+
+def test_phase_noise_needs_the_waveform_and_changes_nothing_when_off():
+    from radioslam.capture import CaptureMode
+    from radioslam.sim import Simulator
+    from radioslam.sim.errors import SimulationError
+
+    noisy = RadioConfig(impairments=Impairments(phase_noise_linewidth_hz=100.0))
+    with pytest.raises(SimulationError):
+        Simulator.from_scene(load_scene("single-plate:4").with_radio(**noisy.model_dump()), CaptureMode.GRID,
+                             rows=[23]).simulate_pose(0, np.random.default_rng(0))
+
+
+def _plate(range_m, width_m):
+    return scene_from_mapping({"version": 1, "name": "plate", "trajectory": {"poses": [[0.0, 0.0, 0.0]]},
+                               "walls": [{"points": [[range_m, -width_m / 2], [range_m, width_m / 2]],
+                                          "material": "metal"}]}, "test")
+
+
+@pytest.mark.parametrize("range_m", [0.8, 4.0, 12.8])
+def test_facets_of_a_wall_sum_to_its_image_source_and_of_a_plate_to_the_fresnel_integral(range_m):
+    """Stationary phase: a wall far wider than its first Fresnel zone √(λR/2) returns the image source's
+    echo; a strip of width L ≪ R returns √2·|C(w) + jS(w)| of it, w = (L/2)·√(4/(λR)) (Fresnel integrals;
+    paraxial, so not at 0.8 m, where the 1 m plate spans ±32°)."""
+    from scipy.special import fresnel
+
+    from radioslam.sim.facets import facet_paths
+    from radioslam.sim.paths import _echo, specular_paths
+
+    for width, expected in ((20.0, None), (1.0, "fresnel"))[:1 if range_m < 1 else 2]:
+        scene = _plate(range_m, width)
+        image = specular_paths(scene, np.zeros(3), scene.radio)[1][0]
+        r, gain, *_ = facet_paths(scene, np.zeros(3), scene.radio)
+        total = _echo(r, gain, scene.radio)[1].sum()
+        if expected is None:
+            assert abs(total / image - 1) < 0.02
+        else:
+            s, c = fresnel(width / 2 * np.sqrt(4 / (scene.radio.wavelength_m * range_m)))
+            assert abs(abs(total / image) - np.sqrt(2) * abs(c + 1j * s)) < 0.02

@@ -41,6 +41,13 @@ class LeakageCoupling(str, Enum):
     UNIFORM = "uniform"  # the same on every beam (one isolation figure; the model before issue #13)
 
 
+class Oscillators(str, Enum):
+    """Where the transmitter's and the receiver's carriers come from."""
+
+    SHARED = "shared"  # one LO for both, as in a monostatic terminal: phase noise cancels but over the delay
+    SEPARATE = "separate"  # two free-running LOs: the phase noise of both adds up, whatever the delay
+
+
 class Impairments(BaseModel):
     """Hardware impairments of the simulated front end (issue #13), each off by default; their physics
     in :mod:`radioslam.sim.impairments`. I/Q imbalance and the ADC act on the waveform (waveform mode)."""
@@ -61,6 +68,13 @@ class Impairments(BaseModel):
     hardware_delay_drift_s: float = Field(0.0, ge=-1e-6, le=1e-6)
     # the TX→RX leakage's change between its calibration (a capture with nothing in range) and use: a gain
     # and a phase on every beam's coupling (temperature, the PA's and LNA's operating point)
+    # Wiener phase noise of the LO, its 3 dB (Lorentzian) linewidth; the TX side is applied per OFDM symbol
+    # as if cyclic, valid while 2π·linewidth·(N + CP)/f_s ≪ 1 (the bound keeps that below 0.06 rad²)
+    phase_noise_linewidth_hz: float = Field(0.0, ge=0.0, le=1e3)
+    oscillators: Oscillators = Oscillators.SHARED
+    # the walls' specular return as physical-optics facets along each wall (a finite plate is an extended
+    # target, not a point: its Fresnel zones and edges are in the echo) instead of one image source
+    specular_facets: bool = False
     leakage_drift_db: float = Field(0.0, ge=-6.0, le=6.0)
     leakage_drift_deg: float = Field(0.0, ge=-180.0, le=180.0)
 
@@ -77,7 +91,8 @@ class Impairments(BaseModel):
     @property
     def time_domain(self) -> bool:
         """Whether an impairment acts on the received waveform (grid mode cannot model it)."""
-        return self.iq_gain_db != 0.0 or self.iq_phase_deg != 0.0 or self.adc_bits is not None
+        return (self.iq_gain_db != 0.0 or self.iq_phase_deg != 0.0 or self.adc_bits is not None
+                or self.phase_noise_linewidth_hz > 0.0)
 
 
 class RadioConfig(BaseModel):

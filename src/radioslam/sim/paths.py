@@ -28,6 +28,7 @@ import numpy as np
 from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
 from radioslam.scene.model import Scene
 from radioslam.scene.raycast import cast_rays
+from radioslam.sim.facets import facet_paths
 
 
 class PathKind(IntEnum):
@@ -99,12 +100,21 @@ def specular_paths(scene: Scene, pose: np.ndarray, radio: RadioConfig):
     return tau, amp, np.angle(np.exp(1j * (world[s] - pose[2]))), s, foot[s]
 
 
+def facet_specular(scene: Scene, pose: np.ndarray, radio: RadioConfig):
+    """Specular returns as physical-optics facets (:mod:`radioslam.sim.facets`)."""
+    r, gain, angle, segment, point = facet_paths(scene, pose, radio)
+    tau, amp = _echo(r, gain, radio)
+    return tau, amp, angle, segment, point
+
+
 def echo_paths(scene: Scene, pose: np.ndarray, radio: RadioConfig | None = None,
                leakage: bool = True) -> EchoPaths:
     """Every echo path of the terminal at ``pose`` (x, y, θ)."""
     radio = radio or scene.radio
     pose = np.asarray(pose, dtype=np.float64)
-    parts = [diffuse_paths(scene, pose, radio), specular_paths(scene, pose, radio)]
+    specular = facet_specular(scene, pose, radio) if radio.impairments.specular_facets else \
+        specular_paths(scene, pose, radio)
+    parts = [diffuse_paths(scene, pose, radio), specular]
     kinds = [np.full(len(p[0]), k) for p, k in zip(parts, (PathKind.DIFFUSE, PathKind.SPECULAR))]
     if leakage and np.isfinite(radio.isolation_db):
         parts.append(_leakage(radio))

@@ -23,6 +23,7 @@ from radioslam.sim.errors import SimulationError
 from radioslam.sim.impairments import receiver_chain, transmitter_chain
 from radioslam.sim.noise import add_noise, noise_variance
 from radioslam.sim.paths import EchoPaths, echo_paths
+from radioslam.sim.phase_noise import OscillatorPhases
 from radioslam.sim.waveform import synthesize_windows
 
 WINDOW_GUARD_SAMPLES = 16
@@ -119,13 +120,27 @@ class Simulator:
         tx[:, 0] = self.pss_symbol
         tx[:, 1:] = qam16_modulate(bits, np.complex64)
         tx = transmitter_chain(tx, num, radio.impairments)  # the PA's compression, if any
+        lo = self.oscillator_phases(n_beams, rng)  # the LO's phase noise, if any
+        if lo is not None:
+            tx = lo.transmitted(tx, self.window_cp, num)
         d_min, _, cumulative = binned_channel_response(gains, delays * num.sample_rate_hz, p,
                                                        radio.subcarrier_spacing_hz, num.sample_rate_hz,
                                                        row_blocks=min(radio.orientations, n_beams))
         clean = synthesize_windows(tx, self.window_cp, cumulative, d_min, num, self.window_length)
+        if lo is not None:
+            clean = lo.received(clean)
         # 5. AWGN at the ★ SNR of the reference echo, then the receiver's I/Q imbalance and ADC (if any)
         received = add_noise(clean, self.noise_variance, rng, inplace=True)
         return Capture(mode=CaptureMode.WAVEFORM, samples=receiver_chain(received, radio.impairments), **common)
+
+    def oscillator_phases(self, n_beams: int, rng: np.random.Generator) -> OscillatorPhases | None:
+        """The LO's phase over every beam window (drawn only when the radio has phase noise)."""
+        imp, fs = self.radio.impairments, self.numerology.sample_rate_hz
+        if imp.phase_noise_linewidth_hz == 0.0:
+            return None
+        latency = int(round((self.radio.hardware_delay_s + imp.hardware_delay_drift_s) * fs))
+        return OscillatorPhases.draw(rng, n_beams, self.window_length, latency, imp.phase_noise_linewidth_hz, fs,
+                                     imp.oscillators)
 
     def simulate(self, seed: int):
         """Captures of every pose; pose i draws from its own child of ``SeedSequence(seed)``."""

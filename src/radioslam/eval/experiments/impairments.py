@@ -3,8 +3,7 @@ as the paper's prototype might have them (``prototype``), ranging RMSE of the re
 against the plain N_c-point IFFT peak (T1's grid).
 
 The profile is an estimate from the prototype's parts (paper §V, Table II), not a measurement; each
-value and why is in docs/architecture.md (§ Hardware impairments). Phase noise is not modelled yet:
-the profile leaves it out.
+value and why is in docs/architecture.md (§ Hardware impairments).
 """
 
 from __future__ import annotations
@@ -15,7 +14,8 @@ from radioslam.config import Impairments, RadioConfig
 from radioslam.eval.experiments.table1 import Table1Result, run_table1
 
 # iq: a mixer's 30–35 dB image rejection; adc: the USRP-2974's 14 bits; pa: driven for range; elements:
-# uncalibrated phase shifters; drift: temperature between calibration and use (docs/architecture.md)
+# uncalibrated phase shifters; drift: temperature between calibration and use; phase-noise, leakage and
+# extended: below (docs/architecture.md)
 PROFILES: dict[str, Impairments] = {
     "ideal": Impairments(),
     "iq": Impairments(iq_gain_db=0.3, iq_phase_deg=2.0),
@@ -23,6 +23,12 @@ PROFILES: dict[str, Impairments] = {
     "pa": Impairments(pa_backoff_db=6.0, pa_smoothness=2.0),
     "elements": Impairments(element_gain_db=1.0, element_phase_deg=10.0, element_seed=1),
     "drift": Impairments(hardware_delay_drift_s=100e-12),
+    # a 28 GHz PLL with −90 dBc/Hz at 100 kHz: a Wiener linewidth of π·f²·L(f) ≈ 31 Hz, one LO for TX and RX
+    "phase-noise": Impairments(phase_noise_linewidth_hz=31.0),
+    # the leakage's gain and phase since its calibration (temperature): cancelled at its calibrated lag
+    "leakage": Impairments(leakage_drift_db=0.5, leakage_drift_deg=5.0),
+    # the 1 m plate as physical-optics facets: an extended target, not a point
+    "extended": Impairments(specular_facets=True),
 }
 PROFILES["prototype"] = Impairments(**{k: v for p in PROFILES.values() for k, v in p.model_dump(exclude_defaults=True)
                                        .items()})
