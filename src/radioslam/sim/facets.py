@@ -53,7 +53,8 @@ def facet_paths(scene: Scene, pose: np.ndarray, radio: RadioConfig):
     on_facet = (hits.segment == segment[:, None]) & hits.valid & (np.abs(hits.distance - r[:, None]) < step)
     seen = on_facet.any(axis=1) & (r > 1e-6)
     trans = np.where(on_facet, hits.transmission, 0.0).sum(axis=1)
-    gamma = scene.material_array("reflectivity")[segment] * np.sqrt(1.0 - scene.material_array("scattering")[segment] ** 2)
+    scattering = scene.material_array("scattering")[segment]
+    gamma = scene.material_array("reflectivity")[segment] * np.sqrt(1.0 - scattering**2)
     gain = gamma * np.exp(1j * np.pi / 4) * np.sqrt(2.0 / (radio.wavelength_m * r)) * cos_psi * width * trans
     f = np.flatnonzero(seen)
     return r[f], gain[f], np.angle(np.exp(1j * (world[f] - pose[2]))), segment[f], point[f]
