@@ -348,7 +348,8 @@ def reproduce(
     trials: Optional[int] = typer.Option(None, "--trials", min=1, help="Monte Carlo trials (default per experiment)"),
     impairments: str = typer.Option("ideal", "--impairments",
                                     help="table1: the radio's hardware profile (ideal, iq, adc, pa, elements, "
-                                         "drift, prototype; docs/architecture.md)"),
+                                         "drift, phase-noise, leakage, extended, prototype; "
+                                         "docs/architecture.md)"),
 ) -> None:
     """Reproduce the paper's experiments: Table I, Fig. 5, Fig. 8 and Fig. 6 (SLAM on paper-cnv); and
     Table I under hardware impairments (impairments)."""
