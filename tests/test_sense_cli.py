@@ -98,6 +98,19 @@ def test_calibrate_from_recorded_captures(tmp_path):
               "--ranges", "1.6,3.2,6.4")
     assert out.returncode == 0, out.stderr
     assert abs(read_calibration(tmp_path / "cal.json").hardware_delay_s - 32e-6) < 1e-9
+    assert read_calibration(tmp_path / "cal.json").leakage is None
+    # with a recorded sweep of every beam with nothing in range, the leakage of each beam too
+    from radioslam.config import RadioConfig
+    from radioslam.io import write_capture
+    from radioslam.sim.calibration_targets import simulate_empty_capture
+
+    write_capture(simulate_empty_capture(RadioConfig(), np.random.default_rng(9)), tmp_path / "empty")
+    out = run("calibrate", "--out", str(tmp_path / "cal.json"), "--captures", str(base / "captures"),
+              "--ranges", "1.6,3.2,6.4", "--empty", str(tmp_path / "empty"))
+    assert out.returncode == 0, out.stderr
+    leakage = read_calibration(tmp_path / "cal.json").leakage
+    assert len(leakage.delay_s) == 188 and "leakage of 188 beams" in out.stderr
+    assert np.median(np.abs(leakage.delay_s - 0.05 / 299_792_458.0)) * 122.88e6 < 0.01  # b/c after T_H
     bad = run("calibrate", "--out", str(tmp_path / "c2.json"), "--captures", str(base / "captures"), "--ranges", "1,2")
     assert bad.returncode == 2 and "--ranges" in bad.stderr and len(bad.stderr.strip().splitlines()) == 1
 
