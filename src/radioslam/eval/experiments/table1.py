@@ -15,6 +15,7 @@ from radioslam.config import RadioConfig
 from radioslam.eval.crb import range_crb_m
 from radioslam.eval.point_targets import capture_point_targets, nearest_beam, point_paths
 from radioslam.sensing import Receiver, SensingConfig, estimate_hardware_delay
+from radioslam.sensing.detect import leakage_cancelled
 from radioslam.sim.calibration_targets import calibration_ranges, plate_simulator, simulate_calibration
 
 NEAR_GATE_M = 0.3  # Table I starts at 0.8 m; its ε1 (the IFFT grid peak) is searched from here too
@@ -52,9 +53,13 @@ def plate_errors(radio: RadioConfig, receiver: Receiver, range_m: float, trials:
     sim = plate_simulator(radio, range_m)
     e1, e2 = [], []
     for child in np.random.SeedSequence(seed).spawn(trials):
-        res = receiver.sense(sim.simulate_pose(0, np.random.default_rng(child)))
-        gated = np.where(res.profile_range_m[0] >= NEAR_GATE_M, res.profile_power[0], -np.inf)
-        e1.append(res.profile_range_m[0, np.argmax(gated)] - range_m)  # the N_c-point IFFT peak alone
+        capture = sim.simulate_pose(0, np.random.default_rng(child))
+        res = receiver.sense(capture)
+        # the N_c-point IFFT peak alone, on the profile the receiver searches (the leakage cancelled)
+        searched = leakage_cancelled(res.spectrum, receiver.range_gate(capture, res.window_offset))
+        power = np.abs(searched.profile()[0]) ** 2
+        gated = np.where(res.profile_range_m[0] >= NEAR_GATE_M, power, -np.inf)
+        e1.append(res.profile_range_m[0, np.argmax(gated)] - range_m)
         e2.append(res.range_m[0, 0] - range_m)
     return np.array(e1), np.array(e2)
 
