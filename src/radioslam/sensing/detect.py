@@ -264,23 +264,30 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
     searching = np.ones(len(rows), dtype=bool)
     spent = 0
     for slot in range(1, m + 1):
-        resid = spec.minus(spec.path_spectrum(np.nan_to_num(lag), np.where(present, amp, 0.0)))
+        # only the beams still searching: a beam whose last search found nothing is done, its paths refined
+        active = np.flatnonzero(searching)
+        sub = spec.rows(active)
+        resid = sub.minus(sub.path_spectrum(np.nan_to_num(lag[active]), np.where(present[active], amp[active], 0.0)))
         profile = resid.profile()
         power = np.abs(profile) ** 2
         # CFAR only where it can matter: the local maxima in the gate above the noise threshold
-        candidate = local_maxima(power) & allowed_lags & (power > noise_threshold(power, cfg.noise_pfa) + leakage_floor)
+        floor = noise_threshold(power, cfg.noise_pfa) + leakage_floor[active]
+        candidate = local_maxima(power) & allowed_lags[active] & (power > floor)
         cells = np.nonzero(candidate)
         candidate[cells] = power[cells] > cfar_threshold(power, cfg.cfar, cfg.cfar_guard, cfg.cfar_train,
                                                          cfg.cfar_pfa, cells)
         peaks, ok = strongest(power, candidate, 1)
-        searching &= ok[:, 0]
-        if not searching.any():
+        found = ok[:, 0]
+        searching[active] = found
+        if not found.any():
             break
-        refined = refiner.refine(resid, signed_lag(peaks, n), neighbour_values(profile, peaks))
-        present[:, slot] = searching
-        lag[:, slot] = np.where(searching, refined.lag[:, 0], np.nan)
-        amp[:, slot] = np.where(searching, refined.amplitude[:, 0], 0.0)
-        lag, amp, used = refine_jointly(spec, lag, amp, present, fixed, cfg.relax_passes, refiner)
+        now = active[found]
+        refined = refiner.refine(resid.rows(found), signed_lag(peaks[found], n), neighbour_values(profile[found],
+                                                                                                peaks[found]))
+        present[now, slot] = True
+        lag[now, slot], amp[now, slot] = refined.lag[:, 0], refined.amplitude[:, 0]
+        lag[now], amp[now], used = refine_jointly(spec.rows(now), lag[now], amp[now], present[now], fixed,
+                                                  cfg.relax_passes, refiner)
         spent += refined.dft_evaluations + used
     # two paths that converged onto one another are one target: keep the stronger, and estimate the
     # amplitudes again without the other (two paths at one lag make the least squares ill-posed: their
