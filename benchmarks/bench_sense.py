@@ -1,5 +1,5 @@
 """Sensing speed: median time to sense one paper-cnv pose (188 beams × 12 symbols, waveform mode),
-per detector. The peak refinement's accuracy and cost on real echo peaks: ``bench_refine.py``.
+per detector, by the receiver a run senses with (T_H and the leakage calibrated: the gate from 0.5 m). The peak refinement's accuracy and cost on real echo peaks: ``bench_refine.py``.
 
     python benchmarks/bench_sense.py [--repeats 21]
 """
@@ -12,7 +12,8 @@ import time
 import numpy as np
 
 from radioslam.scene import load_scene
-from radioslam.sensing import Detector, Receiver, Refinement, SensingConfig
+from radioslam.pipeline import calibrated_receiver
+from radioslam.sensing import Detector, Refinement, SensingConfig
 from radioslam.sim import Simulator
 
 
@@ -34,7 +35,7 @@ def main() -> None:
     rows = []
     for det in Detector:
         for refine in Refinement:
-            rx = Receiver(scene.radio, scene.radio.hardware_delay_s, SensingConfig(detector=det, refine=refine))
+            rx = calibrated_receiver(scene.radio, 0, SensingConfig(detector=det, refine=refine))
             rx.sense(cap)
             med, p90 = timed(lambda rx=rx: rx.sense(cap), args.repeats)
             target = "target ≤ 50 ms" if det is Detector.SINGLE else "target ≤ 60 ms (#13)"
