@@ -11,8 +11,8 @@ import time
 
 import numpy as np
 
-from radioslam.scene import load_scene
 from radioslam.pipeline import calibrated_receiver
+from radioslam.scene import load_scene
 from radioslam.sensing import Detector, Refinement, SensingConfig
 from radioslam.sim import Simulator
 
