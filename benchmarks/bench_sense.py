@@ -1,5 +1,6 @@
 """Sensing speed: median time to sense one paper-cnv pose (188 beams × 12 symbols, waveform mode),
-per detector, by the receiver a run senses with (T_H and the leakage calibrated: the gate from 0.5 m). The peak refinement's accuracy and cost on real echo peaks: ``bench_refine.py``.
+per detector, by the receiver a run senses with (T_H and the leakage calibrated: the gate from 0.5 m).
+The peak refinement's accuracy and cost on real echo peaks: ``bench_refine.py``.
 
     python benchmarks/bench_sense.py [--repeats 21]
 """
