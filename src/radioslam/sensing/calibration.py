@@ -77,9 +77,8 @@ def measure_leakage(capture: Capture, cfg: SensingConfig | None = None) -> Leaka
     receiver = Receiver(capture.radio, None, cfg)
     _, _, est = receiver.front_end(capture)  # where a beam's PSS is too weak, its window is the others'
     offset = est.window_offset
-    half = receiver.n / 2 / receiver.fs
-    gate = receiver.gate(capture, offset, offset / receiver.fs - half, offset / receiver.fs + half)
-    det = detect_single(pdp_spectrum(est, receiver.p, receiver.n), gate, receiver.cfg, receiver.refiner)
+    det = detect_single(pdp_spectrum(est, receiver.p, receiver.n), receiver.window_gate(capture, offset),
+                        receiver.cfg, receiver.refiner)
     seen = det.valid[:, 0]
     if not seen.any():
         raise SensingError("no leakage on any beam: is the receiver on?", file=capture.source,

@@ -111,6 +111,10 @@ class Receiver:
                 (self.hardware_delay_s + self.leakage_delay_s(capture)) * self.fs - offset)
         return LagGate(low_s * self.fs - offset, high_s * self.fs - offset, leak)
 
+    def window_gate(self, capture: Capture, offset: np.ndarray) -> LagGate:
+        """Every lag of each beam's FFT window (N/2 either side of its offset)."""
+        return self.gate(capture, offset, (offset - self.n / 2) / self.fs, (offset + self.n / 2) / self.fs)
+
     @property
     def min_range_m(self) -> float:
         if self.cfg.min_range_m is not None:
@@ -166,9 +170,9 @@ class Receiver:
         one = capture.select([row])
         t1, _, est = self.front_end(one)
         offset = est.window_offset
-        low, high = ((offset - self.n / 2) / self.fs, (offset + self.n / 2) / self.fs) if window_s is None else (
-            np.array([window_s[0]]), np.array([window_s[1]]))
-        return t1, offset, pdp_spectrum(est, self.p, self.n), self.gate(one, offset, low, high)
+        gate = self.window_gate(one, offset) if window_s is None else self.gate(
+            one, offset, np.array([window_s[0]]), np.array([window_s[1]]))
+        return t1, offset, pdp_spectrum(est, self.p, self.n), gate
 
     def beam_delay(self, capture: Capture, row: int, window_s: tuple[float, float] | None = None):
         """(T1, T2) in seconds of the strongest PDP echo on one beam (calibration, eq. (11)).
