@@ -20,7 +20,7 @@ from radioslam.capture import CaptureMode
 from radioslam.scene import builtin_scene
 from radioslam.sim import Simulator
 
-TARGET_MS = {CaptureMode.WAVEFORM: 150.0, CaptureMode.GRID: None}
+TARGET_MS = {CaptureMode.WAVEFORM: 70.0, CaptureMode.GRID: None}  # issue #13, point 4
 
 
 def measure(mode: CaptureMode, repeats: int) -> dict:

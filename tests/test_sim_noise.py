@@ -54,3 +54,32 @@ def test_default_leakage_is_as_strong_as_the_reference_echo():
     ratio_db = -radio.isolation_db - 10 * np.log10(reference_echo_power(radio))
     assert ratio_db == pytest.approx(-0.3, abs=0.1)
     assert 10 * np.log10(reference_echo_power(radio)) == pytest.approx(-69.7, abs=0.1)
+
+
+def test_box_muller_noise_is_circular_gaussian_of_the_asked_variance():
+    from scipy import stats
+
+    from radioslam.sim.noise import add_noise
+    variance = 2.5
+    z = add_noise(np.zeros((4, 150_000), np.complex64), variance, np.random.default_rng(7)).ravel().astype(complex)
+    assert np.mean(np.abs(z) ** 2) == pytest.approx(variance, rel=0.01)
+    assert abs(np.mean(z**2)) < 0.01 * variance  # circular: E[z²] = 0, so the rails are equal and uncorrelated
+    assert abs(np.mean(z)) < 0.01 * np.sqrt(variance)
+    for rail in (z.real, z.imag):  # each rail N(0, σ²/2)
+        assert stats.kstest(rail / np.sqrt(variance / 2), "norm").pvalue > 1e-3
+        assert stats.kurtosis(rail) == pytest.approx(0.0, abs=0.05)
+    # Box–Muller from 23-bit uniforms: |z| ≤ σ·√(23·ln 2), reached with probability 2^-23 per sample
+    assert np.abs(z).max() <= np.sqrt(variance * 23 * np.log(2)) * (1 + 1e-6)
+    # the tail up to there is Rayleigh: P(|z|² > 9σ²) = e^-9
+    assert np.mean(np.abs(z) ** 2 > 9 * variance) == pytest.approx(np.exp(-9.0), rel=0.15)
+
+
+def test_noise_depends_on_the_seed_only_and_its_halves_differ():
+    from radioslam.sim.noise import add_noise
+    a = add_noise(np.zeros((6, 70_001), np.complex64), 1.0, np.random.default_rng(3))
+    b = add_noise(np.zeros((6, 70_001), np.complex64), 1.0, np.random.default_rng(3))
+    c = add_noise(np.zeros((6, 70_001), np.complex64), 1.0, np.random.default_rng(4))
+    assert np.array_equal(a, b) and not np.array_equal(a, c)
+    assert abs(np.corrcoef(a[0].real, a[3].real)[0, 1]) < 0.02  # the two halves' streams are independent
+    x = np.ones((2, 10), np.complex64)
+    assert np.array_equal(add_noise(x, 0.0, np.random.default_rng(0)), x)  # zero variance adds nothing

@@ -142,3 +142,23 @@ def test_window_holds_burst_plus_hardware_delay_plus_max_range(radio):
         2 * radio.max_range_m / 299_792_458.0 * radio.sample_rate_hz
     with pytest.raises(ValueError):
         synthesize_windows(np.zeros((1, 1, 792)), np.array([[72]]), np.ones((1, 1, 792)), 10, NUM, 1000)
+
+
+@given(st.lists(st.floats(0.0, 4000.0), min_size=1, max_size=40), st.integers(0, 2**31),
+       st.sampled_from([(1024, 792), (1024, 1024), (256, 200)]))
+@settings(max_examples=20, deadline=None)
+def test_binned_response_equals_the_direct_phasor_sums(delays, seed, sizes):
+    # the per-bin Taylor series is exact to single precision on any band, up to the full FFT
+    n, n_sc = sizes
+    rng = np.random.default_rng(seed)
+    delays = np.array(delays)
+    gains = rng.standard_normal((3, len(delays))) + 1j * rng.standard_normal((3, len(delays)))
+    p = np.arange(n_sc) - n_sc // 2
+    d_min, d_max, cum = binned_channel_response(gains, delays, p, 120e3, n * 120e3)
+    d = np.ceil(delays - 1e-9).astype(int)
+    assert (d_min, d_max) == (d.min(), d.max()) and cum.shape == (d_max - d_min + 1, 3, n_sc)
+    scale = np.abs(gains).sum(axis=1, keepdims=True)
+    for m in range(d_max - d_min + 1):
+        arrived = d <= d_min + m
+        direct = gains[:, arrived] @ np.exp(-2j * np.pi * np.outer(delays[arrived], p) / n)
+        assert np.max(np.abs(cum[m] - direct) / scale) < 1e-6

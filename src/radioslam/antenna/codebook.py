@@ -127,21 +127,22 @@ class BeamSet:
     def two_way_gain(self, theta_terminal: np.ndarray) -> np.ndarray:
         """Amplitude gain (B, P) of every beam towards paths at terminal-frame angles (P,).
 
-        ϖ_i(θ − k·π/2) times the element pattern cos^q each way; zero behind the array.
+        ϖ_i(θ − k·π/2) times the element pattern cos^q each way; zero behind the array. Per
+        orientation only the paths in front of its array are evaluated.
         """
-        local = np.asarray(theta_terminal)[None, :] - self.orientation_angle[:, None]
-        local = (local + np.pi) % (2 * np.pi) - np.pi  # wrap to [−π, π)
-        front = np.abs(local) < np.pi / 2
-        cos_l = np.where(front, np.cos(local), 0.0)
-        out = np.empty(local.shape)
+        theta = np.asarray(theta_terminal, dtype=np.float64)
+        out = np.zeros((len(self), theta.size))
         w = self.weights()
         tx, rx = (None, None) if self.element_response is None else map(np.array, self.element_response)
         for k in range(self.orientations):  # 4 orientations; beams and paths stay vectorized
-            rows = self.orientation == k
-            vartheta = spatial_frequency(local[rows][0])
+            rows = np.flatnonzero(self.orientation == k)
+            local = (theta - k * 2 * np.pi / self.orientations + np.pi) % (2 * np.pi) - np.pi  # [−π, π)
+            front = np.flatnonzero(np.abs(local) < np.pi / 2)
+            vartheta = spatial_frequency(local[front])
             if tx is None:
-                out[rows] = np.abs(array_response(w[rows], vartheta)) ** 2
+                gain = np.abs(array_response(w[rows], vartheta)) ** 2
             else:  # each array's elements respond e_n·a_n: |w^H (e_T∘a)|·|w^H (e_R∘a)|
-                out[rows] = np.abs(array_response(w[rows] * tx.conj(), vartheta)) * \
+                gain = np.abs(array_response(w[rows] * tx.conj(), vartheta)) * \
                     np.abs(array_response(w[rows] * rx.conj(), vartheta))
-        return np.where(front, out * cos_l**self.element_exponent, 0.0)
+            out[np.ix_(rows, front)] = gain * np.cos(local[front]) ** self.element_exponent
+        return out

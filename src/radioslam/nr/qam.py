@@ -21,8 +21,7 @@ def qam16_modulate(bits: np.ndarray, dtype=np.complex128) -> np.ndarray:
         return qam16_modulate(padded, dtype)[..., :-1]
     # packbits puts two symbols' b0b1b2b3 into one byte: the high nibble, then the low one
     packed = np.packbits(b, axis=-1)
-    index = np.stack([packed >> 4, packed & 15], axis=-1).reshape(*packed.shape[:-1], -1)
-    return _TABLE.astype(dtype, copy=False)[index]
+    return np.take(_PAIRS.astype(dtype, copy=False), packed, axis=0).reshape(*packed.shape[:-1], -1)
 
 
 def _table() -> np.ndarray:
@@ -32,6 +31,7 @@ def _table() -> np.ndarray:
 
 
 _TABLE = _table()  # the 16 points of 38.211 §5.1.4, indexed by b0b1b2b3
+_PAIRS = np.stack([_TABLE[np.arange(256) >> 4], _TABLE[np.arange(256) & 15]], axis=-1)  # the two symbols of a byte
 
 
 def qam16_demodulate(symbols: np.ndarray) -> np.ndarray:

@@ -7,8 +7,10 @@ beams, paths, symbols and subcarriers.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 from radioslam.antenna.codebook import BeamSet
 from radioslam.capture import Capture, CaptureMode
@@ -18,7 +20,7 @@ from radioslam.nr.numerology import Numerology
 from radioslam.nr.pss import pss_grid
 from radioslam.nr.qam import qam16_modulate, random_bits
 from radioslam.scene.model import Scene
-from radioslam.sim.channel import beam_path_gains, binned_channel_response, channel_response
+from radioslam.sim.channel import beam_path_gains, binned_channel_response
 from radioslam.sim.errors import SimulationError
 from radioslam.sim.impairments import receiver_chain, transmitter_chain
 from radioslam.sim.noise import add_noise, noise_variance
@@ -27,6 +29,12 @@ from radioslam.sim.phase_noise import OscillatorPhases
 from radioslam.sim.waveform import synthesize_windows
 
 WINDOW_GUARD_SAMPLES = 16
+
+
+@cache
+def blas_controller() -> ThreadpoolController:
+    """The BLAS libraries loaded by numpy and scipy (found once)."""
+    return ThreadpoolController()
 
 
 def draw_tx_bits(radio: RadioConfig, n_beams: int, rng: np.random.Generator) -> np.ndarray:
@@ -93,7 +101,14 @@ class Simulator:
         return self.capture_from_paths(paths, rng, pose_index)
 
     def capture_from_paths(self, paths: EchoPaths, rng: np.random.Generator, pose_index: int = 0) -> Capture:
-        """The capture of echo paths (over-the-air delays; the hardware delay is added here)."""
+        """The capture of echo paths (over-the-air delays; the hardware delay is added here).
+
+        Its matrix products are small: BLAS runs single-threaded meanwhile, so that its idle
+        threads do not spin against the synthesis's and the noise's own two workers."""
+        with blas_controller().limit(limits=1, user_api="blas"):
+            return self._capture_from_paths(paths, rng, pose_index)
+
+    def _capture_from_paths(self, paths: EchoPaths, rng: np.random.Generator, pose_index: int) -> Capture:
         radio, num = self.radio, self.numerology
         # 2. two-way beam gain ϖ of every path on every beam (eq. (4))
         gains = beam_path_gains(self.beams, paths)[self.rows]
@@ -102,6 +117,10 @@ class Simulator:
         n_beams = len(self.rows)
         bits = draw_tx_bits(radio, n_beams, rng)
         p = num.subcarrier_indices()
+        # the channel H_i(p) of eq. (4), split by the sample at which each path arrives
+        d_min, _, cumulative = binned_channel_response(gains, delays * num.sample_rate_hz, p,
+                                                       radio.subcarrier_spacing_hz, num.sample_rate_hz,
+                                                       row_blocks=min(radio.orientations, n_beams))
         common = dict(radio=radio, pose_index=pose_index, orientation=self.beams.orientation[self.rows],
                       beam_index=self.beams.index[self.rows], beam_angle_rad=self.beams.angle[self.rows],
                       ssb_index=self.beams.slot[self.rows], symbol_indices=self.window_symbols, tx_bits=bits)
@@ -110,8 +129,7 @@ class Simulator:
                 raise SimulationError("I/Q imbalance and the ADC act on the waveform: simulate in waveform mode",
                                       field="radio.impairments")
             # 4a. resource grid directly, y = H(p)·x + z (eq. (4)), at the receiver's FFT timing
-            h = channel_response(gains, delays, p, radio.subcarrier_spacing_hz)
-            h = h * np.exp(2j * np.pi * p * self.timing_offset() / num.fft_size)
+            h = cumulative[-1] * np.exp(2j * np.pi * p * self.timing_offset() / num.fft_size)
             sent = transmitter_chain(qam16_modulate(bits), num, radio.impairments)
             grid = add_noise(h[:, None, :] * sent, self.noise_variance, rng)
             return Capture(mode=CaptureMode.GRID, grid=grid, fft_offset_samples=self.timing_offset(), **common)
@@ -123,9 +141,6 @@ class Simulator:
         lo = self.oscillator_phases(n_beams, rng)  # the LO's phase noise, if any
         if lo is not None:
             tx = lo.transmitted(tx, self.window_cp, num)
-        d_min, _, cumulative = binned_channel_response(gains, delays * num.sample_rate_hz, p,
-                                                       radio.subcarrier_spacing_hz, num.sample_rate_hz,
-                                                       row_blocks=min(radio.orientations, n_beams))
         clean = synthesize_windows(tx, self.window_cp, cumulative, d_min, num, self.window_length)
         if lo is not None:
             clean = lo.received(clean)

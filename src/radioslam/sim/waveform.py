@@ -20,58 +20,102 @@ H(p)·a_p (times the window-timing phase): the grid mode of eq. (4).
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 import scipy.fft as sfft
 
 from radioslam.nr.numerology import Numerology
-from radioslam.nr.ofdm import cp_gather_index, symbol_starts, to_fft_bins
+from radioslam.nr.ofdm import symbol_starts
+from radioslam.sim.channel import unit_roots
 
-
-def _boundary_factors(tx_grid: np.ndarray, cp: np.ndarray, p: np.ndarray, n: int) -> np.ndarray:
-    """a_{l,p}·e^{−j2πp·cp_l/N} − a_{l−1,p} for the boundaries l = 0 … L (symbols −1 and L silent)."""
-    rotated = tx_grid * np.exp(-2j * np.pi * np.outer(cp, p) / n).astype(tx_grid.dtype)[None]
-    d = np.zeros((tx_grid.shape[0], tx_grid.shape[1] + 1, tx_grid.shape[2]), dtype=tx_grid.dtype)
-    d[:, :-1] = rotated
-    d[:, 1:] -= tx_grid
-    return d
+SYNTHESIS_BLOCK_BEAMS = 24  # beams per task: their buffers stay in cache
 
 
 def synthesize_windows(tx_grid: np.ndarray, cp: np.ndarray, cumulative: np.ndarray, d_min: int,
                        numerology: Numerology, window_length: int) -> np.ndarray:
     """Received windows (B, W) complex64 for TX grids (B, L, n_sc) with CP lengths (B, L).
 
-    ``cumulative`` (B, M+1, n_sc) and ``d_min`` come from
+    ``cumulative`` (M+1, B, n_sc) and ``d_min`` come from
     :func:`radioslam.sim.channel.binned_channel_response`; window sample 0 is the
-    start of the beam's transmitted burst. Beams are processed in groups that
-    share a CP pattern (a handful), everything else is vectorized.
+    start of the beam's transmitted burst. Beams are processed in blocks (of up to
+    SYNTHESIS_BLOCK_BEAMS sharing a CP pattern) on two threads, each writing its own rows;
+    everything else is vectorized, in single precision.
     """
     n = numerology.fft_size
-    b_count = tx_grid.shape[0]
-    m_count = cumulative.shape[1] - 1
+    m_count = cumulative.shape[0] - 1
     d_max = d_min + m_count
-    p = numerology.subcarrier_indices()
-    burst = (cp + n).sum(axis=1)
-    if d_max + burst.max() > window_length:
+    if d_max + (cp + n).sum(axis=1).max() > window_length:
         raise ValueError(f"window of {window_length} samples is shorter than delay + burst")
-    out = np.zeros((b_count, window_length), dtype=np.complex64)
-    m = d_min + np.arange(m_count)
-    f = (cumulative[:, :m_count] * np.exp(2j * np.pi * np.outer(m, p) / n)[None]).astype(np.complex64)
-    tx_grid = tx_grid.astype(np.complex64)
+    p = numerology.subcarrier_indices()
+    out = np.zeros((tx_grid.shape[0], window_length), dtype=np.complex64)
+    grid = np.asarray(tx_grid, dtype=np.complex64)
+    cumulative = np.asarray(cumulative, dtype=np.complex64)
+    offsets = d_min + np.arange(m_count)
     patterns, which = np.unique(cp, axis=0, return_inverse=True)
-    for g, pattern in enumerate(patterns):  # beams sharing one CP pattern (a handful of groups)
-        rows = np.flatnonzero(which.ravel() == g)
-        grid = tx_grid[rows]
-        # base: every path inside the same symbol → OFDM through the full channel H
-        through = grid * cumulative[rows, -1][:, None, :].astype(np.complex64)
-        spectrum = to_fft_bins(through, numerology, np.complex64)
-        useful = sfft.ifft(spectrum, axis=-1, norm="ortho", overwrite_x=True).reshape(len(rows), -1)
-        length = int(pattern.sum() + n * len(pattern))
-        out[rows, d_max:d_max + length] = useful[:, cp_gather_index(pattern, n, d_max)]
-        if m_count == 0:
-            continue
-        # corrections after each symbol boundary, where only some paths have moved on
-        corr = (f[rows] @ _boundary_factors(grid, pattern, p, n).transpose(0, 2, 1)) / np.float32(np.sqrt(n))
-        starts = np.append(symbol_starts(pattern, n), length)
-        pos = (starts[None, :] + m[:, None]).ravel()  # (M·(L+1),) matching corr's (M, L+1)
-        out[rows[:, None], pos[None, :]] += corr.reshape(len(rows), -1)
+    tasks = [(g, block) for g in range(len(patterns))
+             for block in np.array_split(np.flatnonzero(which.ravel() == g),
+                                         -(-np.count_nonzero(which.ravel() == g) // SYNTHESIS_BLOCK_BEAMS))]
+
+    def synthesize(k: int) -> None:  # one block of beams sharing a CP pattern
+        pattern, rows = patterns[tasks[k][0]], tasks[k][1]
+        sent = grid[rows]
+        prefix = CyclicPrefixes(pattern, n)
+        # the full H seen from d_max late, times the usual prefix's e^{−j2πp·cp/N}
+        settled = cumulative[-1, rows] * unit_roots(d_max - prefix.usual, p, n)
+        _write_settled(out, rows, sent, settled, prefix, d_max, numerology)
+        if m_count:  # the partial channels C_m·e^{j2πpm/N} at each boundary offset m
+            partial = cumulative[:m_count, rows].transpose(1, 0, 2) * unit_roots(offsets, p, n)
+            _add_boundaries(out, rows, sent, partial, prefix, offsets, p)
+
+    with ThreadPoolExecutor(max_workers=2) as pool:  # blocks write disjoint rows: the result is the same
+        list(pool.map(synthesize, range(len(tasks))))
     return out
+
+
+class CyclicPrefixes:
+    """One CP pattern (L,): where its symbols start, and e^{−j2πp·cp_l/N} as the usual (most common)
+    prefix's factor, applied with another factor at once, times a fix on the few symbols that differ."""
+
+    def __init__(self, pattern: np.ndarray, fft_size: int):
+        values, counts = np.unique(pattern, return_counts=True)
+        self.pattern, self.n, self.usual = pattern, fft_size, int(values[np.argmax(counts)])
+        self.starts = symbol_starts(pattern, fft_size)  # (L,) and the burst's end
+        self.boundaries = np.append(self.starts, (pattern + fft_size).sum())
+        self.unusual = np.flatnonzero(pattern != self.usual)
+
+    def fix_unusual(self, symbols: np.ndarray, frequencies: np.ndarray) -> None:
+        """Symbols (R, L, F) at ``frequencies`` (F,) that carry the usual factor: give the others theirs."""
+        for symbol in self.unusual:  # one or two per pattern
+            symbols[:, symbol] *= unit_roots(self.usual - self.pattern[symbol], frequencies, self.n)
+
+
+def _write_settled(out, rows, sent, settled, prefix: CyclicPrefixes, d_max: int, numerology: Numerology) -> None:
+    """Where every path is inside the same symbol: symbol l through the full channel H, periodically
+    extended over its N + cp_l samples from its (latest) gate on. One IFFT per symbol."""
+    n, negative, n_sc = numerology.fft_size, numerology.n_subcarriers // 2, numerology.n_subcarriers
+    spectrum = np.empty((*sent.shape[:2], n), dtype=np.complex64)  # DC-centred FFT bins
+    spectrum[..., n_sc - negative:n - negative] = 0.0  # the guard band
+    np.multiply(sent[..., :negative], settled[:, None, :negative], out=spectrum[..., n - negative:])
+    np.multiply(sent[..., negative:], settled[:, None, negative:], out=spectrum[..., :n_sc - negative])
+    prefix.fix_unusual(spectrum, np.arange(n))  # bin k is subcarrier k mod N: the same root of unity
+    periodic = sfft.ifft(spectrum, axis=-1, norm="ortho", overwrite_x=True)
+    for symbol, (start, cp) in enumerate(zip(prefix.starts + d_max, prefix.pattern)):  # 13 symbols, sliced
+        out[rows, start:start + n] = periodic[:, symbol]
+        out[rows, start + n:start + n + cp] = periodic[:, symbol, :cp]
+
+
+def _add_boundaries(out, rows, sent, partial, prefix: CyclicPrefixes, offsets, p: np.ndarray) -> None:
+    """In the d_max − d_min samples after each symbol boundary only some paths have moved on:
+    add Σ_p C_m(p)·e^{j2πpm/N}·(a_{l,p}e^{−j2πp·cp_l/N} − a_{l−1,p}) (symbols −1 and L silent),
+    one (M × n_sc)·(n_sc × L+1) matrix product per beam."""
+    count, n = sent.shape[1], prefix.n
+    steps = np.empty((len(rows), count + 1, sent.shape[2]), dtype=np.complex64)  # a_l·e^{…} − a_{l−1}
+    np.multiply(sent, unit_roots(-prefix.usual, p, n), out=steps[:, :count])
+    prefix.fix_unusual(steps, p)
+    steps[:, count] = 0.0
+    steps[:, 1:] -= sent
+    correction = partial @ steps.transpose(0, 2, 1)
+    correction /= np.float32(np.sqrt(n))
+    at = (prefix.boundaries[None, :] + offsets[:, None]).ravel()  # (M·(L+1),) matching correction's (M, L+1)
+    out[rows[:, None], at[None, :]] += correction.reshape(len(rows), -1)
