@@ -8,8 +8,9 @@ BITS_PER_SYMBOL = 4
 _SCALE = 1.0 / np.sqrt(10.0)
 
 
-def qam16_modulate(bits: np.ndarray, dtype=np.complex128) -> np.ndarray:
-    """Map bits (..., 4k) of 0/1 to 16-QAM symbols (..., k).
+def qam16_modulate(bits: np.ndarray, dtype=np.complex128, out: np.ndarray | None = None) -> np.ndarray:
+    """Map bits (..., 4k) of 0/1 to 16-QAM symbols (..., k), into ``out`` if given (any array of that
+    shape whose last axis is contiguous, e.g. a slice of a larger grid: no temporary).
 
     d = [(1−2b0)(2−(1−2b2)) + j(1−2b1)(2−(1−2b3))] / √10, 38.211 §5.1.4.
     """
@@ -21,7 +22,13 @@ def qam16_modulate(bits: np.ndarray, dtype=np.complex128) -> np.ndarray:
         return qam16_modulate(padded, dtype)[..., :-1]
     # packbits puts two symbols' b0b1b2b3 into one byte: the high nibble, then the low one
     packed = np.packbits(b, axis=-1)
-    return np.take(_PAIRS.astype(dtype, copy=False), packed, axis=0).reshape(*packed.shape[:-1], -1)
+    pairs = _PAIRS.astype(dtype if out is None else out.dtype, copy=False)
+    if out is None:
+        return np.take(pairs, packed, axis=0).reshape(*packed.shape[:-1], -1)
+    target = out.view()
+    target.shape = (*packed.shape, 2)  # a view of ``out`` (raises where only a copy could be)
+    np.take(pairs, packed, axis=0, out=target, mode="clip")  # "clip": written in place, not buffered
+    return out
 
 
 def _table() -> np.ndarray:

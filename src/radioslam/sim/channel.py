@@ -70,8 +70,9 @@ def binned_channel_response(gains: np.ndarray, delays_samples: np.ndarray, subca
     zero gain on all of their beams.
     """
     n = int(round(sample_rate_hz / spacing_hz))  # the FFT size N
-    order = np.argsort(delays_samples, kind="stable")
-    delays_samples, gains = delays_samples[order], gains[:, order]
+    if np.any(np.diff(delays_samples) < 0):  # sorted already when the paths come by delay
+        order = np.argsort(delays_samples, kind="stable")
+        delays_samples, gains = delays_samples[order], gains[:, order]
     d = np.ceil(delays_samples - 1e-9).astype(np.int64)
     d_min, d_max = int(d[0]), int(d[-1])
     terms = taylor_terms(np.pi * np.abs(subcarriers).max() / n)

@@ -9,7 +9,6 @@ it. With orthonormal FFTs the per-RE noise variance equals the time-domain one.
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from functools import lru_cache
 
 import numpy as np
@@ -20,6 +19,7 @@ from radioslam.nr.numerology import Numerology
 from radioslam.scene.loader import scene_from_mapping
 from radioslam.sim.channel import beam_path_gains, channel_response
 from radioslam.sim.paths import echo_paths
+from radioslam.sim.workers import worker_pool
 
 REFERENCE_RANGE_M = 5.0
 REFERENCE_MATERIAL = "concrete"
@@ -100,8 +100,7 @@ def add_noise(x: np.ndarray, variance: float, rng: np.random.Generator, inplace:
         for start in range(0, len(part), NOISE_CHUNK_SAMPLES):  # chunks held in cache, each vectorized
             add_circular_gaussian(part[start:start + NOISE_CHUNK_SAMPLES], children[k].bit_generator, sigma)
 
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        list(pool.map(draw, (0, 1)))
+    list(worker_pool().map(draw, (0, 1)))
     return out
 
 

@@ -51,6 +51,12 @@ class EchoPaths:
     def __len__(self) -> int:
         return len(self.delay_s)
 
+    def by_delay(self) -> "EchoPaths":
+        """The same paths, shortest delay first (ties keep their order)."""
+        order = np.argsort(self.delay_s, kind="stable")
+        return EchoPaths(self.delay_s[order], self.amplitude[order], self.angle[order], self.kind[order],
+                         self.segment[order], self.point[order])
+
 
 def _echo(r, gain_wo_range, radio: RadioConfig):
     tau = bistatic_delay_s(r, radio.array_baseline_m)

@@ -26,7 +26,7 @@ from radioslam.sim.impairments import receiver_chain, transmitter_chain
 from radioslam.sim.noise import add_noise, noise_variance
 from radioslam.sim.paths import EchoPaths, echo_paths
 from radioslam.sim.phase_noise import OscillatorPhases
-from radioslam.sim.waveform import synthesize_windows
+from radioslam.sim.waveform import BurstSymbols, synthesize_windows
 
 WINDOW_GUARD_SAMPLES = 16
 
@@ -111,7 +111,9 @@ class Simulator:
     def _capture_from_paths(self, paths: EchoPaths, rng: np.random.Generator, pose_index: int) -> Capture:
         radio, num = self.radio, self.numerology
         # 2. two-way beam gain ϖ of every path on every beam (eq. (4))
-        gains = beam_path_gains(self.beams, paths)[self.rows]
+        paths = paths.by_delay()  # the order the delay bins want: no reordered copy of the gains
+        gains = beam_path_gains(self.beams, paths)
+        gains = gains if len(self.rows) == len(self.beams) else gains[self.rows]
         delays = paths.delay_s + radio.hardware_delay_s + radio.impairments.hardware_delay_drift_s
         # 3. what each beam transmits: PSS symbol, then R symbols of random 16-QAM (through the PA in 4a/4b)
         n_beams = len(self.rows)
@@ -134,13 +136,11 @@ class Simulator:
             grid = add_noise(h[:, None, :] * sent, self.noise_variance, rng)
             return Capture(mode=CaptureMode.GRID, grid=grid, fft_offset_samples=self.timing_offset(), **common)
         # 4b. time-domain windows: every path at its exact fractional delay
-        tx = np.empty((n_beams, 1 + radio.symbols_per_beam, len(p)), dtype=np.complex64)
-        tx[:, 0] = self.pss_symbol
-        tx[:, 1:] = qam16_modulate(bits, np.complex64)
-        tx = transmitter_chain(tx, num, radio.impairments)  # the PA's compression, if any
+        tx = BurstSymbols(self.pss_symbol, bits)  # mapped block by block inside the synthesis
         lo = self.oscillator_phases(n_beams, rng)  # the LO's phase noise, if any
-        if lo is not None:
-            tx = lo.transmitted(tx, self.window_cp, num)
+        if radio.impairments.pa_backoff_db is not None or lo is not None:  # they act on the whole grid
+            tx = transmitter_chain(tx[np.arange(n_beams)], num, radio.impairments)  # the PA's compression
+            tx = tx if lo is None else lo.transmitted(tx, self.window_cp, num)
         clean = synthesize_windows(tx, self.window_cp, cumulative, d_min, num, self.window_length)
         if lo is not None:
             clean = lo.received(clean)

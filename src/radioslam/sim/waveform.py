@@ -20,21 +20,44 @@ H(p)·a_p (times the window-timing phase): the grid mode of eq. (4).
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.fft as sfft
 
 from radioslam.nr.numerology import Numerology
 from radioslam.nr.ofdm import symbol_starts
+from radioslam.nr.qam import qam16_modulate
 from radioslam.sim.channel import unit_roots
+from radioslam.sim.workers import worker_pool
 
 SYNTHESIS_BLOCK_BEAMS = 24  # beams per task: their buffers stay in cache
 
 
-def synthesize_windows(tx_grid: np.ndarray, cp: np.ndarray, cumulative: np.ndarray, d_min: int,
+@dataclass(frozen=True)
+class BurstSymbols:
+    """What each beam sends, (B, 1 + R, n_sc) as a grid: its PSS symbol, then the 16-QAM of its bits
+    (B, R, 4·n_sc). Indexing with beam rows maps just those beams, so the synthesis builds each block's
+    symbols where it uses them and the whole grid never exists at once."""
+
+    pss: np.ndarray  # (n_sc,)
+    bits: np.ndarray
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return self.bits.shape[0], 1 + self.bits.shape[1], len(self.pss)
+
+    def __getitem__(self, rows: np.ndarray) -> np.ndarray:
+        grid = np.empty((len(rows), *self.shape[1:]), dtype=np.complex64)
+        grid[:, 0] = self.pss
+        qam16_modulate(self.bits[rows], out=grid[:, 1:])
+        return grid
+
+
+def synthesize_windows(tx_grid: np.ndarray | BurstSymbols, cp: np.ndarray, cumulative: np.ndarray, d_min: int,
                        numerology: Numerology, window_length: int) -> np.ndarray:
-    """Received windows (B, W) complex64 for TX grids (B, L, n_sc) with CP lengths (B, L).
+    """Received windows (B, W) complex64 for TX grids (B, L, n_sc) (an array or :class:`BurstSymbols`)
+    with CP lengths (B, L).
 
     ``cumulative`` (M+1, B, n_sc) and ``d_min`` come from
     :func:`radioslam.sim.channel.binned_channel_response`; window sample 0 is the
@@ -48,8 +71,9 @@ def synthesize_windows(tx_grid: np.ndarray, cp: np.ndarray, cumulative: np.ndarr
     if d_max + (cp + n).sum(axis=1).max() > window_length:
         raise ValueError(f"window of {window_length} samples is shorter than delay + burst")
     p = numerology.subcarrier_indices()
-    out = np.zeros((tx_grid.shape[0], window_length), dtype=np.complex64)
-    grid = np.asarray(tx_grid, dtype=np.complex64)
+    out = np.empty((tx_grid.shape[0], window_length), dtype=np.complex64)
+    out[:, :d_max] = 0.0  # before the first gate; each beam's burst and what follows are written below
+    grid = tx_grid if isinstance(tx_grid, BurstSymbols) else np.asarray(tx_grid, dtype=np.complex64)
     cumulative = np.asarray(cumulative, dtype=np.complex64)
     offsets = d_min + np.arange(m_count)
     patterns, which = np.unique(cp, axis=0, return_inverse=True)
@@ -64,12 +88,12 @@ def synthesize_windows(tx_grid: np.ndarray, cp: np.ndarray, cumulative: np.ndarr
         # the full H seen from d_max late, times the usual prefix's e^{−j2πp·cp/N}
         settled = cumulative[-1, rows] * unit_roots(d_max - prefix.usual, p, n)
         _write_settled(out, rows, sent, settled, prefix, d_max, numerology)
+        out[rows, d_max + prefix.boundaries[-1]:] = 0.0  # after the burst
         if m_count:  # the partial channels C_m·e^{j2πpm/N} at each boundary offset m
             partial = cumulative[:m_count, rows].transpose(1, 0, 2) * unit_roots(offsets, p, n)
             _add_boundaries(out, rows, sent, partial, prefix, offsets, p)
 
-    with ThreadPoolExecutor(max_workers=2) as pool:  # blocks write disjoint rows: the result is the same
-        list(pool.map(synthesize, range(len(tasks))))
+    list(worker_pool().map(synthesize, range(len(tasks))))  # blocks write disjoint rows: same result
     return out
 
 
