@@ -89,6 +89,16 @@ def test_calibration_json_round_trips_the_leakage_and_names_a_bad_field(tmp_path
     with pytest.raises(CalibrationFileError) as err:
         read_calibration(path)
     assert err.value.field == "leakage.delay_s"
+    # the beams' keys are whole numbers, each beam listed once: no silent truncation to another beam
+    good = json.dumps({**doc, "leakage": {**doc["leakage"], "delay_s": cal.leakage.delay_s.tolist()}})
+    for field, value, why in [("orientation", 0.5, "whole numbers"), ("beam_index", -2.7, "whole numbers"),
+                              ("orientation", -1, "whole numbers ≥ 0"), ("beam_index", -3, "listed twice")]:
+        doc = json.loads(good)
+        doc["leakage"][field][1] = value
+        path.write_text(json.dumps(doc))
+        with pytest.raises(CalibrationFileError) as err:
+            read_calibration(path)
+        assert why in str(err.value)
 
 
 def test_a_receiver_asked_for_a_beam_its_leakage_calibration_lacks_says_which():

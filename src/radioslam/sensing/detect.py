@@ -146,14 +146,14 @@ def polish(spec: RangeSpectrum, lag: np.ndarray, present: np.ndarray, fixed: np.
     eye = np.eye(lag.shape[1])[None]
     model, inv_m = spec.model[:, None, :], 1.0 / spec.model[:, None, :]  # (B, 1, P)
     for _ in range(iterations):  # sums over subcarriers as batched products (B, M, P) @ (B, P, ·)
-        amp = joint_amplitudes(spec, lag, present)
         e = phase_ramp(np.nan_to_num(lag), spec.p, spec.fft_size) * present[..., None]
+        e_conj = e.conj()
+        gram = _ridge((e_conj * model) @ e.transpose(0, 2, 1) + eye * (~present)[:, :, None])  # Σ_p e_i* m e_j
+        amp = np.linalg.solve(gram, e_conj @ spec.s[..., None])[..., 0]  # :func:`joint_amplitudes`, from e
         resid = spec.s - (amp[:, None, :] @ e)[:, 0] * spec.model  # S − Σ_k a_k m e_k
         d = amp[..., None] * model * e * (-w)  # ∂(model)/∂t_k
         # project out the amplitudes' span (Kaufman's variable-projection Jacobian)
-        e_conj = e.conj()
-        gram = (e_conj * model) @ e.transpose(0, 2, 1) + eye * (~present)[:, :, None]  # Σ_p e_i* m e_j
-        coef = np.linalg.solve(_ridge(gram), e_conj @ d.transpose(0, 2, 1))  # (B, M_cols, M_derivs)
+        coef = np.linalg.solve(gram, e_conj @ d.transpose(0, 2, 1))  # (B, M_cols, M_derivs)
         d = d - (coef.transpose(0, 2, 1) @ e) * model
         weighted = d.conj() * inv_m  # d_i* / m
         hess = (weighted @ d.transpose(0, 2, 1)).real
@@ -203,8 +203,12 @@ def _with_leakage(spec: RangeSpectrum, gate: LagGate, slots: int):
 def residual_floor(spec: RangeSpectrum, leakage: np.ndarray, residual_db: float) -> np.ndarray:
     """(B, N) what cancelling the leakage (its spectrum ``leakage``, (B, n_sc)) may leave at each lag:
     its profile's power, ``residual_db`` below it."""
-    profile = RangeSpectrum(leakage, spec.model, spec.p, spec.fft_size).profile()
-    return 10.0 ** (residual_db / 10.0) * np.abs(profile) ** 2
+    floor = np.zeros((leakage.shape[0], spec.fft_size))
+    known = np.flatnonzero(np.any(leakage != 0, axis=1))  # beams without a leakage estimate: nothing to leave
+    if len(known):
+        profile = RangeSpectrum(leakage[known], spec.model[known], spec.p, spec.fft_size).profile()
+        floor[known] = 10.0 ** (residual_db / 10.0) * np.abs(profile) ** 2
+    return floor
 
 
 def leakage_cancelled(spec: RangeSpectrum, gate: LagGate) -> RangeSpectrum:

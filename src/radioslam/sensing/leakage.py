@@ -2,7 +2,7 @@
 
 A full-duplex terminal hears its own transmission through the coupling between its TX and RX
 arrays: one echo-like path per beam whose amplitude and phase follow the beams' weights (the
-coupling of two steered arrays, 18 dB stronger at broadside than at the codebook's edge) and whose
+coupling of two steered arrays, 22 dB stronger at broadside than at the codebook's edge) and whose
 delay is the coupling path's, b/c between stacked arrays plus whatever the housing adds. At this
 bandwidth (1.22 m per range cell) all of it is one tap per beam.
 
@@ -73,6 +73,11 @@ class LeakageModel:
                 raise ValueError(f"leakage.{name}: must be a list of finite numbers")
         if len({len(a) for a in arrays.values()}) != 1 or len(arrays["delay_s"]) == 0:
             raise ValueError("leakage: its lists must be non-empty and of one length")
+        for name in ("orientation", "beam_index"):  # keys: whole numbers (orientation also ≥ 0)
+            if np.any(arrays[name] != np.round(arrays[name])) or (name == "orientation" and np.any(arrays[name] < 0)):
+                raise ValueError(f"leakage.{name}: must be whole numbers" + (" ≥ 0" if name == "orientation" else ""))
+        if len(set(zip(arrays["orientation"], arrays["beam_index"]))) != len(arrays["orientation"]):
+            raise ValueError("leakage: a beam (orientation, beam_index) is listed twice")
         if np.any(np.abs(arrays["delay_s"]) > 1e-6):
             raise ValueError("leakage.delay_s: must be within ±1 µs of the hardware delay")
         return cls(arrays["orientation"].astype(np.int64), arrays["beam_index"].astype(np.int64), arrays["delay_s"],
