@@ -290,8 +290,10 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
                                                                                                 peaks[found]))
         present[now, slot] = True
         lag[now, slot], amp[now, slot] = refined.lag[:, 0], refined.amplitude[:, 0]
-        lag[now], amp[now], used = refine_jointly(spec.rows(now), lag[now], amp[now], present[now], fixed,
-                                                  cfg.relax_passes, refiner)
+        held = slice(0, 1 + slot)
+        lag[now, held], amp[now, held], used = refine_jointly(spec.rows(now), lag[now, held], amp[now, held],
+                                                              present[now, held], fixed[held], cfg.relax_passes,
+                                                              refiner)
         spent += refined.dft_evaluations + used
     # two paths that converged onto one another are one target: keep the stronger, and estimate the
     # amplitudes again without the other (two paths at one lag make the least squares ill-posed: their
