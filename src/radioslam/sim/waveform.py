@@ -104,8 +104,8 @@ class CyclicPrefixes:
     def __init__(self, pattern: np.ndarray, fft_size: int):
         values, counts = np.unique(pattern, return_counts=True)
         self.pattern, self.n, self.usual = pattern, fft_size, int(values[np.argmax(counts)])
-        self.starts = symbol_starts(pattern, fft_size)  # (L,) and the burst's end
-        self.boundaries = np.append(self.starts, (pattern + fft_size).sum())
+        self.starts = symbol_starts(pattern, fft_size)  # (L,)
+        self.boundaries = np.append(self.starts, (pattern + fft_size).sum())  # and the burst's end
         self.unusual = np.flatnonzero(pattern != self.usual)
 
     def fix_unusual(self, symbols: np.ndarray, frequencies: np.ndarray) -> None:
