@@ -34,7 +34,7 @@ from radioslam.scene import Scene, scene_to_yaml
 from radioslam.scene.procedural import Case, robustness_suite
 from radioslam.sensing import SensingConfig
 from radioslam.sensing.pointcloud import Scan
-from radioslam.sim import Simulator
+from radioslam.sim import RANDOM_STREAM_VERSION, Simulator
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, load_slam_config
 
 FIELDS = ("range_m", "angle_rad", "power_db", "beam", "orientation")
@@ -44,7 +44,8 @@ SUCCESS_M, LOST_M = 0.2, 1.0
 def cache_file(scene: Scene, seed: int, cache: Path) -> Path:
     # the receiver's settings too: scans sensed with another refinement, say, are not these; and how it
     # was calibrated (since issue #13: T_H and the leakage from a simulated calibration, as in a run)
-    receiver = SensingConfig().model_dump_json() + "calibrated T_H and leakage"
+    receiver = SensingConfig().model_dump_json() + "calibrated T_H and leakage" + \
+        f"; random stream {RANDOM_STREAM_VERSION}"  # scans simulated with other draws are not these
     key = hashlib.sha1(scene_to_yaml(scene).encode() + str(seed).encode() + receiver.encode()).hexdigest()[:16]
     return cache / f"{scene.name}-{key}.npz"
 
