@@ -162,3 +162,19 @@ def test_binned_response_equals_the_direct_phasor_sums(delays, seed, sizes):
         arrived = d <= d_min + m
         direct = gains[:, arrived] @ np.exp(-2j * np.pi * np.outer(delays[arrived], p) / n)
         assert np.max(np.abs(cum[m] - direct) / scale) < 1e-6
+
+
+def _simulate_one_beam(seed):
+    sim = Simulator.from_scene(builtin_scene("single-plate:4"), rows=np.array([0, 1]))
+    return sim.simulate_pose(0, np.random.default_rng(seed)).samples
+
+
+def test_a_forked_child_simulates_with_its_own_workers_and_the_same_result():
+    # the synthesis's thread pool lives for the process; a child made by fork inherits none of its
+    # threads and must start its own (a pool object without threads would hang the child)
+    import multiprocessing
+
+    here = _simulate_one_beam(5)  # the parent's pool is running now
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        there = pool.apply_async(_simulate_one_beam, (5,)).get(timeout=120)
+    assert np.array_equal(here, there)
