@@ -6,6 +6,8 @@ it split by the integer sample at which each path's symbol boundaries arrive.
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 from scipy.special import gamma
 
@@ -22,8 +24,8 @@ def delay_phasors(delays_s: np.ndarray, subcarriers: np.ndarray, spacing_hz: flo
 def beam_path_gains(beams: BeamSet, paths: EchoPaths) -> np.ndarray:
     """Complex gain ϖ_{i,k}·b_k of every path on every beam, shape (B, P); the leakage's ϖ is the
     beam's TX→RX coupling (:meth:`~radioslam.antenna.codebook.BeamSet.coupling`)."""
-    leak = np.flatnonzero(paths.kind == PathKind.LEAKAGE)
-    gain = beams.two_way_gain(np.where(paths.kind == PathKind.LEAKAGE, 0.0, paths.angle)) * paths.amplitude
+    leak = paths.kind == PathKind.LEAKAGE
+    gain = beams.two_way_gain(np.where(leak, 0.0, paths.angle)) * paths.amplitude  # leakage angle NaN: overwritten
     gain[:, leak] = beams.coupling()[:, None] * paths.amplitude[leak]
     return gain
 
@@ -98,5 +100,13 @@ def binned_channel_response(gains: np.ndarray, delays_samples: np.ndarray, subca
 def unit_roots(shifts: np.ndarray | int, subcarriers: np.ndarray, n: int) -> np.ndarray:
     """e^{+j2πp·s/N} for integer shifts s (...) and subcarriers (n_sc,), complex64 (..., n_sc), exact:
     looked up at (p·s mod N) in a table of the N roots of unity, so large s lose no precision."""
+    index = np.multiply.outer(np.asarray(shifts, dtype=np.int64), np.asarray(subcarriers, dtype=np.int64)) % n
+    return _roots_of_unity(n)[index]
+
+
+@cache
+def _roots_of_unity(n: int) -> np.ndarray:
+    """e^{j2πk/N}, k = 0 … N−1, complex64 (built once per N: the synthesis asks for it per block)."""
     table = np.exp(2j * np.pi * np.arange(n) / n).astype(np.complex64)
-    return table[np.multiply.outer(np.asarray(shifts, dtype=np.int64), np.asarray(subcarriers, dtype=np.int64)) % n]
+    table.flags.writeable = False
+    return table

@@ -77,9 +77,9 @@ def synthesize_windows(tx_grid: np.ndarray | BurstSymbols, cp: np.ndarray, cumul
     cumulative = np.asarray(cumulative, dtype=np.complex64)
     offsets = d_min + np.arange(m_count)
     patterns, which = np.unique(cp, axis=0, return_inverse=True)
-    tasks = [(g, block) for g in range(len(patterns))
-             for block in np.array_split(np.flatnonzero(which.ravel() == g),
-                                         -(-np.count_nonzero(which.ravel() == g) // SYNTHESIS_BLOCK_BEAMS))]
+    members = [np.flatnonzero(which.ravel() == g) for g in range(len(patterns))]
+    tasks = [(g, block) for g, rows in enumerate(members)
+             for block in np.array_split(rows, -(-len(rows) // SYNTHESIS_BLOCK_BEAMS))]
 
     def synthesize(k: int) -> None:  # one block of beams sharing a CP pattern
         pattern, rows = patterns[tasks[k][0]], tasks[k][1]
