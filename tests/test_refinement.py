@@ -3,7 +3,7 @@ profile on two-lobe cases the paper's bisection gets wrong, its precision and de
 paper's bisection kept as an option, and the multi-target amplitudes of two converged paths."""
 
 import numpy as np
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from radioslam.scene import load_scene
@@ -65,16 +65,23 @@ def test_the_bisection_steps_into_the_neighbours_lobe_and_the_bracketed_refineme
 @settings(max_examples=60, deadline=None)
 @given(first=st.floats(5.0, 6.0), gap=st.floats(1.2, 3.0), ratio=st.floats(0.3, 1.0),
        phase=st.floats(0.0, 2 * np.pi), second_after=st.booleans())
+@example(first=5.0, gap=1.201171875, ratio=1.0, phase=1.5, second_after=False)  # two equally high maxima
 def test_the_bracketed_refinement_finds_the_highest_maximum_within_a_sample(first, gap, ratio, phase,
                                                                              second_after):
     """Two paths of any spacing beyond one cell, amplitude ratio and phase: the refined lag is the
-    highest maximum of |F| within ±1 sample of the integer peak to 0.5 cm, and F there is its value."""
+    highest maximum of |F| within ±1 sample of the integer peak to 0.5 cm, and F there is its value.
+    Where two maxima are equally high (equal amplitudes placed symmetrically: first 5.0, gap 1.2012,
+    ratio 1, phase 1.5 gives two maxima 0.9 sample apart whose |F| agree to 1e-14), both are the highest
+    and the fine grid's pick between them is arbitrary: there the refined lag must be the other one,
+    exactly as high."""
     second = first + gap if second_after else first - gap
     spec = two_paths([[first, second]], [[1.0, ratio * np.exp(1j * phase)]])
     peaks, values = integer_peak(spec)
     truth = fine_maximum(spec, peaks)[0]
     out = refiner(Refinement.BRACKETED).refine(spec, peaks, values)
-    assert abs(out.lag[0, 0] - truth) * CELL_M < 5e-3
+    highest = np.abs(spec.at(np.array([[truth]])))[0, 0]
+    twin = abs(np.abs(out.amplitude[0, 0]) - highest) <= 1e-9 * highest and abs(out.lag[0, 0] - truth) > 0.5
+    assert abs(out.lag[0, 0] - truth) * CELL_M < 5e-3 or twin
     assert np.isclose(out.amplitude[0, 0], spec.at(out.lag)[0, 0])
     assert abs(out.amplitude[0, 0]) >= np.abs(spec.at(np.array([[truth]])))[0, 0] * (1 - 1e-6)
 
