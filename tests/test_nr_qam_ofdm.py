@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from radioslam.nr import Numerology, demodulate, modulate, qam16_demodulate, qam16_modulate, random_bits
-from radioslam.nr.ofdm import BlockedSpectrum, from_fft_bins, symbol_starts, to_fft_bins
+from radioslam.nr.ofdm import from_fft_bins, symbol_starts, to_fft_bins
 
 
 def test_qam16_table_of_38_211():
@@ -84,17 +84,6 @@ def test_qam16_any_symbol_count_matches_the_formula(k, seed):
     s = 1 - 2 * b
     expected = (s[..., 0] * (2 - s[..., 2]) + 1j * s[..., 1] * (2 - s[..., 3])) / np.sqrt(10)
     assert np.allclose(qam16_modulate(b.reshape(2, -1).astype(np.uint8)), expected, atol=1e-15)
-
-
-def test_blocked_spectrum_equals_the_direct_dft(rng):
-    """Σ_p X(p) e^{j2πpt/N} at fractional t, for contiguous subcarriers not a square count."""
-    p = np.arange(-396, 396)
-    x = rng.standard_normal((3, len(p))) + 1j * rng.standard_normal((3, len(p)))
-    t = rng.uniform(-512, 512, size=(3, 5))
-    direct = np.einsum("bp,bkp->bk", x, np.exp(2j * np.pi * t[..., None] * p / 1024))
-    assert np.allclose(BlockedSpectrum(x, p, 1024)(t), direct, rtol=0, atol=1e-9)
-    with pytest.raises(ValueError):
-        BlockedSpectrum(x[:, :-1], np.delete(p, 5), 1024)
 
 
 def test_from_fft_bins_inverts_to_fft_bins(rng):

@@ -38,12 +38,21 @@ def symbol_starts(cp_lengths: np.ndarray, fft_size: int) -> np.ndarray:
     return np.cumsum(lengths, axis=-1) - lengths
 
 
-def _contiguous(subcarriers: np.ndarray) -> tuple[int, int]:
+def contiguous_subcarriers(subcarriers: np.ndarray) -> tuple[int, int]:
     """The first index and the count of contiguous subcarriers (the factorizations need them)."""
     p0, n = int(subcarriers[0]), len(subcarriers)
     if not np.array_equal(subcarriers, p0 + np.arange(n)):
         raise ValueError("subcarriers must be contiguous")
     return p0, n
+
+
+def _ramp_factors(shift: np.ndarray, subcarriers: np.ndarray, period: float) -> tuple[np.ndarray, np.ndarray, int]:
+    """e^{−j2π·p·shift/period} = coarse[a]·fine[c] for p = p0 + B·a + c: (…, A), (…, B) and n_sc."""
+    p0, n = contiguous_subcarriers(subcarriers)
+    block = max(1, int(np.sqrt(n)))
+    n_blocks = -(-n // block)
+    w = (-2j * np.pi / period) * np.asarray(shift, dtype=np.float64)[..., None]
+    return np.exp(w * (p0 + block * np.arange(n_blocks))), np.exp(w * np.arange(block)), n
 
 
 def phase_ramp(shift: np.ndarray, subcarriers: np.ndarray, period: float) -> np.ndarray:
@@ -53,40 +62,19 @@ def phase_ramp(shift: np.ndarray, subcarriers: np.ndarray, period: float) -> np.
     p = p0 + B·a + c factors the exponential into two short ones, so only
     (A + B) exponentials per shift are evaluated instead of n_sc.
     """
-    p0, n = _contiguous(subcarriers)
-    block = max(1, int(np.sqrt(n)))
-    n_blocks = -(-n // block)
-    w = (-2j * np.pi / period) * np.asarray(shift, dtype=np.float64)[..., None]
-    coarse = np.exp(w * (p0 + block * np.arange(n_blocks)))  # (..., A)
-    fine = np.exp(w * np.arange(block))  # (..., B)
-    return (coarse[..., :, None] * fine[..., None, :]).reshape(*w.shape[:-1], -1)[..., :n]
+    coarse, fine, n = _ramp_factors(shift, subcarriers, period)
+    return (coarse[..., :, None] * fine[..., None, :]).reshape(*coarse.shape[:-1], -1)[..., :n]
 
 
-class BlockedSpectrum:
-    """Evaluates Σ_p X(p)·e^{+j2πp·t/period} (B, n_sc) at arbitrary shifts t (B, K).
+def summed_phase_ramps(shift: np.ndarray, weight: np.ndarray, subcarriers: np.ndarray, period: float) -> np.ndarray:
+    """Σ_k w_k·e^{−j2π·p·shift_k/period} for shifts and weights (B, K): shape (B, n_sc).
 
-    The same factorization as :func:`phase_ramp`, p = p0 + B·a + c, applied to the sum:
-    Σ_a e^{j2π(p0+Ba)t/T} · Σ_c X(p0+Ba+c)·e^{j2πct/T}, so one evaluation costs n_sc
-    multiply-adds and 2√n_sc exponentials, with no (B, K, n_sc) temporary.
+    :func:`phase_ramp`'s factors with the weights folded into the coarse one, so the sum over k
+    is one product (A, K) @ (K, Bs) per row and no (B, K, n_sc) ramp is built.
     """
-
-    def __init__(self, values: np.ndarray, subcarriers: np.ndarray, period: float):
-        p0, n = _contiguous(subcarriers)
-        self.block = max(1, int(np.ceil(np.sqrt(n))))
-        n_blocks = -(-n // self.block)
-        padded = np.zeros((values.shape[0], n_blocks * self.block), dtype=np.complex128)
-        padded[:, :n] = values
-        self.blocks = padded.reshape(values.shape[0], 1, n_blocks, self.block)  # (B, 1, A, Bs)
-        self.coarse = p0 + self.block * np.arange(n_blocks)
-        self.period = period
-
-    def __call__(self, shifts: np.ndarray, rows: np.ndarray | slice | None = None) -> np.ndarray:
-        """The sums at ``shifts`` (B, K), or of the ``rows`` (an index (R,) or a slice) only at ``shifts``
-        (R, K); None and slices read the blocks in place, an index array gathers a copy."""
-        blocks = self.blocks if rows is None else self.blocks[rows]
-        w = (2j * np.pi / self.period) * np.asarray(shifts, dtype=np.float64)[..., None]  # (B, K, 1)
-        inner = (blocks @ np.exp(w * np.arange(self.block))[..., None])[..., 0]  # (B, K, A)
-        return np.einsum("bka,bka->bk", inner, np.exp(w * self.coarse))
+    coarse, fine, n = _ramp_factors(shift, subcarriers, period)
+    weighted = coarse * np.asarray(weight)[..., None]  # (B, K, A)
+    return (weighted.transpose(0, 2, 1) @ fine).reshape(coarse.shape[0], -1)[:, :n]
 
 
 def to_fft_bins(grid: np.ndarray, numerology: Numerology, dtype=np.complex128) -> np.ndarray:

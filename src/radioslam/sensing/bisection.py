@@ -8,9 +8,9 @@ current peak, it replaces the peak; otherwise, it replaces the adjacent point."
 
 So each step keeps the larger pair of {peak, midpoint, neighbour} and halves the
 bracket; after n steps the peak is known to 2^−n samples (c/(2f_s)·2^−n in range).
-One step costs one n_sc-term DFT evaluation per peak (the midpoint on the side of
-the higher neighbour), evaluated by the blocked factorization of
-:class:`~radioslam.nr.ofdm.BlockedSpectrum`: n_sc multiply-adds, 2√n_sc exponentials.
+One step costs one evaluation of the profile at a fractional lag per peak (the midpoint on
+the side of the higher neighbour): the fractional IFFT, by Kaiser–Bessel interpolation
+(:class:`~radioslam.nr.nufft.LagSums`, equal to the n_sc-term sum to 1e-13).
 Only the peaks marked active are refined (the others keep their integer lag), so
 peaks that do not exist, or cannot become the beam's strongest, cost nothing.
 """

@@ -41,7 +41,7 @@ def grid_offsets() -> np.ndarray:
 
 def straddle_ratio(spec: RangeSpectrum) -> np.ndarray:
     """(B,) |K(step/2)| / |K(0)|: the least fraction of a lone path's amplitude a grid sample keeps."""
-    zero_half = np.broadcast_to(np.array([0.0, GRID_STEP / 2]), (spec.s.shape[0], 2))
+    zero_half = np.broadcast_to(np.array([0.0, GRID_STEP / 2]), (spec.beam_count, 2))
     kernel = np.abs(spec.kernel(zero_half))
     return kernel[:, 1] / kernel[:, 0]
 
@@ -80,7 +80,7 @@ def safeguarded_newton(spec: RangeSpectrum, start: np.ndarray, half_width: float
         active = active[np.abs(moved - at) >= precision / 4]
         if not len(active):
             break
-    value = spec.at_via_derivatives(lag[:, None])[:, 0]
+    value = spec.at(lag[:, None])[:, 0]
     return lag, value, spent + len(lag)
 
 

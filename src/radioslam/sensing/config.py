@@ -85,7 +85,7 @@ class SensingConfig(BaseModel):
     cfar_train: int = Field(16, ge=2)
     cfar_pfa: float = Field(1e-6, gt=0, lt=1)
     max_targets: int = Field(3, ge=1, le=16)  # per beam, multi-target mode
-    relax_passes: int = Field(1, ge=0, le=20)  # cyclic re-estimation passes before the joint polish
+    relax_passes: int = Field(1, ge=0, le=20)  # single: cyclic re-estimation passes before the joint polish
     taper: Taper = Taper.NONE
 
 

@@ -9,10 +9,14 @@
   detection threshold (``leakage_residual_db`` below the leakage's own profile).
 * Single (the paper's): the K̂ largest local maxima in the gate that clear the noise
   floor are refined (T2, :mod:`radioslam.sensing.refiner`); the strongest is the beam's target.
+* Single: the target is then re-estimated with the leakage cancelled (a cyclic RELAX pass,
+  Li & Stoica 1996), and jointly with it by Gauss–Newton where the two lie within
+  ``NEAR_CELLS`` (:mod:`radioslam.sensing.joint`).
 * Multi: CFAR on the residual profile, then successive cancellation: the strongest
-  detection is refined, subtracted, and the search repeats; after each new path
-  every path found so far is re-estimated with the others cancelled (the cyclic
-  RELAX of Li & Stoica 1996), which resolves paths closer than one range cell.
+  detection is refined with the paths found so far cancelled in the lag domain
+  (:mod:`radioslam.sensing.cancelled`), and all of them are re-estimated jointly, the
+  ML estimate by variable-projection Gauss–Newton (:mod:`radioslam.sensing.joint`),
+  which also resolves paths closer than one range cell; then the search repeats.
 All steps are vectorized over beams.
 """
 
@@ -22,14 +26,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from radioslam.nr.ofdm import phase_ramp
 from radioslam.sensing.bisection import neighbour_values
+from radioslam.sensing.cancelled import CancelledSpectrum
 from radioslam.sensing.cfar import cfar_threshold, noise_threshold
 from radioslam.sensing.config import SensingConfig
+from radioslam.sensing.joint import joint_amplitudes, refine_paths
 from radioslam.sensing.profile import RangeSpectrum, signed_lag
 from radioslam.sensing.refiner import PeakRefiner
 
-POLISH_STEPS = 4
+JOINT_STEPS = 4  # joint Gauss–Newton steps at most, ±¼ sample each: a path travels at most one sample
 NEAR_CELLS = 3.0
 MERGE_CELLS = 0.3
 # a lone path half a sample off the integer grid loses 2.3 dB (the Dirichlet kernel of
@@ -68,48 +73,15 @@ def local_maxima(power: np.ndarray) -> np.ndarray:
 
 
 def strongest(power: np.ndarray, allowed: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """The k largest allowed cells per beam: integer lags (B, k) and whether each exists."""
+    """The k largest allowed cells per beam, strongest first: integer lags (B, k) and whether each exists."""
     masked = np.where(allowed, power, -np.inf)
-    # the k largest, unordered; partitioned from the small end of −power: introselect slows ten-fold on
-    # the many equal −inf cells when the k-th is sought from the other end
-    top = np.argpartition(-masked, k - 1, axis=1)[:, :k]
-    order = np.argsort(-np.take_along_axis(masked, top, axis=1), axis=1, kind="stable")
-    idx = np.take_along_axis(top, order, axis=1)
-    return idx, np.isfinite(np.take_along_axis(masked, idx, axis=1))
-
-
-def _cancel_all_but(spec: RangeSpectrum, lag: np.ndarray, amp: np.ndarray, j: int) -> RangeSpectrum:
-    others = amp.copy()
-    others[:, j] = 0.0
-    return spec.minus(spec.path_spectrum(np.nan_to_num(lag), others))
-
-
-def joint_amplitudes(spec: RangeSpectrum, lag: np.ndarray, present: np.ndarray) -> np.ndarray:
-    """Least-squares amplitudes (B, M) of paths at given lags, all at once.
-
-    Model S = Σ_k a_k·m·e_k with e_k(p) = e^{−j2πp t_k/N}: the normal equations are
-    Σ_j (Σ_p m e_i* e_j) a_j = Σ_p e_i* S (the ML estimate for the MF model m = W).
-    Both sides are DFT evaluations: Σ_p m e_i* e_j is the model's kernel at t_i − t_j and
-    Σ_p e_i* S is the unnormalized profile at t_i. The model is real, so the Gram matrix is
-    Hermitian with Σ_p m on its diagonal: only the pairs i < j are evaluated.
-    """
-    b, m = lag.shape
-    t = np.nan_to_num(lag)
-    upper, lower = np.triu_indices(m, 1)
-    gram = np.zeros((b, m, m), dtype=np.complex128)
-    gram[:, upper, lower] = spec.kernel(t[:, upper] - t[:, lower])
-    gram[:, lower, upper] = gram[:, upper, lower].conj()
-    gram[:, np.arange(m), np.arange(m)] = spec.scale[:, None]
-    gram *= present[:, :, None] & present[:, None, :]
-    rhs = spec.at(t) * spec.scale[:, None] * present
-    gram = gram + np.eye(m)[None] * (~present)[:, :, None]  # absent paths: a = 0
-    return np.linalg.solve(_ridge(gram), rhs[..., None])[..., 0]
-
-
-def _ridge(gram: np.ndarray) -> np.ndarray:
-    """A 1e-9 relative diagonal load, so two paths that met at one lag stay solvable."""
-    load = 1e-9 * np.abs(np.trace(gram, axis1=1, axis2=2))[:, None, None] / gram.shape[1]
-    return gram + load * np.eye(gram.shape[1])[None]
+    rows = np.arange(len(power))
+    idx = np.empty((len(power), k), dtype=np.int64)
+    for j in range(k):  # k argmax passes (k ≤ 16): a partition slows ten-fold on the many equal −inf cells
+        idx[:, j] = np.argmax(masked, axis=1)
+        if j + 1 < k:
+            masked[rows, idx[:, j]] = -np.inf
+    return idx, np.isfinite(np.take_along_axis(np.where(allowed, power, -np.inf), idx, axis=1))
 
 
 def relax(spec: RangeSpectrum, lag: np.ndarray, amp: np.ndarray, present: np.ndarray, fixed: np.ndarray,
@@ -119,49 +91,19 @@ def relax(spec: RangeSpectrum, lag: np.ndarray, amp: np.ndarray, present: np.nda
     """
     lag, amp, evaluations = lag.copy(), amp.copy(), 0
     b = lag.shape[0]
+    rows = np.arange(b)
     movable = [j for j in np.flatnonzero(present.any(axis=0)) if not fixed[j]]
     for _ in range(passes):
-        amp = joint_amplitudes(spec, lag, present)  # the sequential amplitudes are biased by each other
+        amp = joint_amplitudes(spec, rows, lag, present)  # the sequential amplitudes are biased by each other
         for j in movable:
-            resid = _cancel_all_but(spec, lag, amp, j)
             here = np.flatnonzero(present[:, j])
-            refined = refiner.track(resid.rows(here), lag[here, j])
+            others = amp[here].copy()
+            others[:, j] = 0.0
+            refined = refiner.track(CancelledSpectrum(spec, rows[here], lag[here], others), lag[here, j])
             lag[here, j] = refined.lag[:, 0]
-            amp = joint_amplitudes(spec, lag, present)
+            amp = joint_amplitudes(spec, rows, lag, present)
             evaluations += refined.dft_evaluations + b * lag.shape[1]
     return lag, amp, evaluations
-
-
-def polish(spec: RangeSpectrum, lag: np.ndarray, present: np.ndarray, fixed: np.ndarray,
-           iterations: int) -> tuple[np.ndarray, np.ndarray]:
-    """Joint Gauss–Newton refinement of all movable lags (B, M), amplitudes by least squares
-    at every step (variable projection, Kaufman's projected Jacobian). Minimizes
-    Σ_p |S − Σ_k a_k m e_k|² / m, the ML cost of the model; steps are clipped to ±0.25 sample.
-    Converges where cyclic RELAX crawls: paths closer than one range cell (the leakage next
-    to a near target, Fig. 8's pair).
-    """
-    lag = lag.copy()
-    movable = present & ~fixed[None, :]
-    w = 2j * np.pi * spec.p / spec.fft_size
-    eye = np.eye(lag.shape[1])[None]
-    model, inv_m = spec.model[:, None, :], 1.0 / spec.model[:, None, :]  # (B, 1, P)
-    for _ in range(iterations):  # sums over subcarriers as batched products (B, M, P) @ (B, P, ·)
-        e = phase_ramp(np.nan_to_num(lag), spec.p, spec.fft_size) * present[..., None]
-        e_conj = e.conj()
-        gram = _ridge((e_conj * model) @ e.transpose(0, 2, 1) + eye * (~present)[:, :, None])  # Σ_p e_i* m e_j
-        amp = np.linalg.solve(gram, e_conj @ spec.s[..., None])[..., 0]  # :func:`joint_amplitudes`, from e
-        resid = spec.s - (amp[:, None, :] @ e)[:, 0] * spec.model  # S − Σ_k a_k m e_k
-        d = amp[..., None] * model * e * (-w)  # ∂(model)/∂t_k
-        # project out the amplitudes' span (Kaufman's variable-projection Jacobian)
-        coef = np.linalg.solve(gram, e_conj @ d.transpose(0, 2, 1))  # (B, M_cols, M_derivs)
-        d = d - (coef.transpose(0, 2, 1) @ e) * model
-        weighted = d.conj() * inv_m  # d_i* / m
-        hess = (weighted @ d.transpose(0, 2, 1)).real
-        grad = (weighted @ resid[..., None])[..., 0].real
-        hess = hess * movable[:, :, None] * movable[:, None, :] + eye * (~movable)[:, :, None]
-        step = np.linalg.solve(_ridge(hess), (grad * movable)[..., None])[..., 0]
-        lag = np.where(movable, lag + np.clip(step, -0.25, 0.25), lag)
-    return lag, joint_amplitudes(spec, lag, present)
 
 
 def close_pairs(lag: np.ndarray, present: np.ndarray, cells: float = NEAR_CELLS) -> np.ndarray:
@@ -179,10 +121,12 @@ def refine_jointly(spec: RangeSpectrum, lag: np.ndarray, amp: np.ndarray, presen
     sidelobes at another are below −20 dB); closer, RELAX crawls and Gauss–Newton finishes.
     """
     lag, amp, spent = relax(spec, lag, amp, present, fixed, passes, refiner)
-    near = close_pairs(lag, present)
-    if near.any():
+    near = np.flatnonzero(close_pairs(lag, present))
+    if len(near):
         lag, amp = lag.copy(), amp.copy()
-        lag[near], amp[near] = polish(spec.rows(near), lag[near], present[near], fixed, POLISH_STEPS)
+        lag[near], amp[near], used = refine_paths(spec, near, lag[near], present[near], fixed, refiner.precision,
+                                                  JOINT_STEPS)
+        spent += used
     return lag, amp, spent
 
 
@@ -239,7 +183,8 @@ def pdp_peaks(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner: P
     if contenders_db is not None:
         peak_power = np.take_along_axis(power, peaks, axis=1)
         active = ok & (peak_power >= peak_power[:, :1] * 10 ** (-contenders_db / 10))
-    refined = refiner.refine(resid, signed_lag(peaks, n), neighbour_values(profile, peaks), active)
+    cancelled = CancelledSpectrum(spec, np.arange(spec.beam_count), lag[:, :1], amp[:, :1])
+    refined = refiner.refine(cancelled, signed_lag(peaks, n), neighbour_values(profile, peaks), active)
     return (lag, amp, present, fixed), refined, ok
 
 
@@ -258,7 +203,7 @@ def detect_single(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refine
 
 
 def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner: PeakRefiner) -> Detections:
-    """CFAR + successive cancellation with RELAX re-estimation (paper §III-B)."""
+    """CFAR + successive cancellation with joint re-estimation of every path found (paper §III-B)."""
     m = cfg.max_targets
     lag, amp, present, fixed = _with_leakage(spec, gate, m)
     n, rows = spec.fft_size, np.arange(spec.s.shape[0])
@@ -286,14 +231,14 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
         if not found.any():
             break
         now = active[found]
-        refined = refiner.refine(resid.rows(found), signed_lag(peaks[found], n), neighbour_values(profile[found],
-                                                                                                peaks[found]))
+        held = slice(0, slot)  # the paths already found: cancelled in the lag domain while the new one is refined
+        cancelled = CancelledSpectrum(spec, now, lag[now, held], amp[now, held])
+        refined = refiner.refine(cancelled, signed_lag(peaks[found], n), neighbour_values(profile[found], peaks[found]))
         present[now, slot] = True
         lag[now, slot], amp[now, slot] = refined.lag[:, 0], refined.amplitude[:, 0]
         held = slice(0, 1 + slot)
-        lag[now, held], amp[now, held], used = refine_jointly(spec.rows(now), lag[now, held], amp[now, held],
-                                                              present[now, held], fixed[held], cfg.relax_passes,
-                                                              refiner)
+        lag[now, held], amp[now, held], used = refine_paths(spec, now, lag[now, held], present[now, held],
+                                                            fixed[held], refiner.precision, JOINT_STEPS)
         spent += refined.dft_evaluations + used
     # two paths that converged onto one another are one target: keep the stronger, and estimate the
     # amplitudes again without the other (two paths at one lag make the least squares ill-posed: their
@@ -304,6 +249,6 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
     merged = np.flatnonzero(twin.any(axis=1))
     if len(merged):
         present[:, 1:] &= ~twin
-        amp[merged] = joint_amplitudes(spec.rows(merged), lag[merged], present[merged])
+        amp[merged] = joint_amplitudes(spec, merged, lag[merged], present[merged])
     valid = present[:, 1:] & gate.contains(np.nan_to_num(lag[:, 1:], nan=-np.inf))
     return Detections(lag[:, 1:], amp[:, 1:], valid, spent)

@@ -19,7 +19,8 @@ from functools import cached_property
 import numpy as np
 import scipy.fft as sfft
 
-from radioslam.nr.ofdm import BlockedSpectrum, phase_ramp
+from radioslam.nr.nufft import LagSums
+from radioslam.nr.ofdm import summed_phase_ramps
 from radioslam.sensing.config import Taper
 from radioslam.sensing.estimate import ChannelEstimate
 
@@ -39,62 +40,61 @@ class RangeSpectrum:
     p: np.ndarray  # (n_sc,) signed subcarrier indices
     fft_size: int
 
+    @property
+    def beam_count(self) -> int:
+        return self.s.shape[0]
+
     @cached_property
     def scale(self) -> np.ndarray:
         """(B,) Σ_p model(p), so that F(t) of a lone path at lag t is its amplitude."""
         return self.model.sum(axis=1)
 
     def profile(self) -> np.ndarray:
-        """F at the N integer lags (B, N), complex."""
+        """F at the N integer lags (B, N), complex (the subcarriers are contiguous)."""
         n = self.fft_size
         bins = np.zeros((self.s.shape[0], n), dtype=np.result_type(self.s.dtype, np.complex64))
-        bins[:, self.p % n] = self.s
+        first, count = int(self.p[0]) % n, len(self.p)  # contiguous subcarriers: two slices, wrapped at N
+        head = min(count, n - first)
+        bins[:, first:first + head], bins[:, :count - head] = self.s[:, :head], self.s[:, head:]
         return sfft.ifft(bins, axis=1, norm="forward", workers=-1) / self.scale[:, None]
 
     @cached_property
-    def _s_sum(self) -> BlockedSpectrum:
-        return BlockedSpectrum(self.s, self.p, self.fft_size)
+    def _signal_sums(self) -> LagSums:
+        return LagSums(self.s, self.p, self.fft_size)
 
     @cached_property
-    def _model_sum(self) -> BlockedSpectrum:
-        return BlockedSpectrum(self.model, self.p, self.fft_size)
+    def _kernel_sums(self) -> LagSums:
+        return LagSums(self.model, self.p, self.fft_size)
 
     def at(self, lags: np.ndarray) -> np.ndarray:
-        """F at fractional lags (B, K): one n_sc-term DFT evaluation per entry."""
-        return self._s_sum(lags) / self.scale[:, None]
+        """F at fractional lags (B, K) (:class:`~radioslam.nr.nufft.LagSums`: 20 multiply-adds each)."""
+        return self._signal_sums(lags)[0] / self.scale[:, None]
+
+    def with_derivatives(self, lags: np.ndarray, rows: np.ndarray | None = None, order: int = 2) -> np.ndarray:
+        """F and its lag derivatives up to ``order`` (≤ 2) at fractional lags (B, K): (order + 1, B, K);
+        with ``rows`` (R,), of those rows only, at lags (R, K)."""
+        scale = self.scale if rows is None else self.scale[rows]
+        return self._signal_sums(lags, rows, order) / scale[:, None]
+
+    def kernel_with_derivatives(self, lags: np.ndarray, rows: np.ndarray | None = None, order: int = 2) -> np.ndarray:
+        """:meth:`kernel` and its lag derivatives up to ``order`` at lags (B, K) (or of ``rows`` only):
+        (order + 1, B, K)."""
+        return self._kernel_sums(lags, rows, order)
 
     @cached_property
-    def _derivative_sums(self) -> BlockedSpectrum:
-        """S, S·jω and S·(jω)² stacked (3B, n_sc), ω = 2πp/N: F and its first two lag derivatives."""
+    def kernel_at_zero(self) -> np.ndarray:
+        """(3, B): the kernel and its first two lag derivatives at lag 0 (Σ_p model·(jω)^k)."""
         jw = 2j * np.pi * self.p / self.fft_size
-        return BlockedSpectrum(np.concatenate([self.s, self.s * jw, self.s * jw**2]), self.p, self.fft_size)
-
-    def at_via_derivatives(self, lags: np.ndarray) -> np.ndarray:
-        """:meth:`at`, through the evaluator of :meth:`with_derivatives` (its F rows): no second
-        evaluator set up where that one is already built."""
-        return self._derivative_sums(lags, slice(0, self.s.shape[0])) / self.scale[:, None]
-
-    def with_derivatives(self, lags: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
-        """F, dF/dt and d²F/dt² at fractional lags (B, K): (3, B, K), in one blocked evaluation; with
-        ``rows`` (R,), of those rows only, at lags (R, K): (3, R, K)."""
-        b = self.s.shape[0]
-        if rows is None:  # every row: the stacked blocks as they are, no gather
-            values = self._derivative_sums(np.tile(lags, (3, 1))) / np.tile(self.scale, 3)[:, None]
-            return values.reshape(3, b, -1)
-        rows = np.asarray(rows)
-        stacked = np.concatenate([rows, rows + b, rows + 2 * b])  # F, F′ and F″ of each row
-        values = self._derivative_sums(np.tile(lags, (3, 1)), stacked) / self.scale[stacked % b][:, None]
-        return values.reshape(3, len(rows), -1)
+        return np.stack([self.model.sum(axis=1), self.model @ jw, self.model @ jw**2])
 
     def kernel(self, lags: np.ndarray) -> np.ndarray:
         """Σ_p model(p)·e^{j2πpt/N} at lags (B, K): the response at lag t of a path at lag 0,
         unnormalized (the Gram entries of two paths t apart)."""
-        return self._model_sum(lags)
+        return self._kernel_sums(lags)[0]
 
     def path_spectrum(self, lags: np.ndarray, amplitude: np.ndarray) -> np.ndarray:
         """The spectrum (B, n_sc) that paths (B, K) of the given lags and amplitudes put in S."""
-        phase = phase_ramp(lags, self.p, self.fft_size)
-        return (amplitude[:, None, :] @ phase)[:, 0] * self.model
+        return summed_phase_ramps(lags, amplitude, self.p, self.fft_size) * self.model
 
     def rows(self, mask: np.ndarray) -> "RangeSpectrum":
         """The beams selected by a boolean mask (B,) or an index array."""
