@@ -102,7 +102,8 @@ class LagSums:
         index = np.arange(len(self.grid)) if rows is None else np.asarray(rows)
         s = lags * self.upsample
         base = np.floor(s)
-        basis = chebyshev.chebvander(2.0 * (s - base) - 1.0, len(self.table) - 1)  # T_k(y) (R, K, D + 1)
+        angle = np.arccos(2.0 * (s - base) - 1.0)  # T_k(y) = cos(k·arccos y): the basis (R, K, D + 1)
+        basis = np.cos(angle[..., None] * np.arange(len(self.table)))
         kernels = (basis @ self.table[:, :order + 1].reshape(len(self.table), -1)).reshape(
             *s.shape, order + 1, self.width)
         taps = (base.astype(np.int64)[..., None] + self.taps) % self.size  # (R, K, W)

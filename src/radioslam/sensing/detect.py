@@ -147,11 +147,14 @@ def _with_leakage(spec: RangeSpectrum, gate: LagGate, slots: int):
 def residual_floor(spec: RangeSpectrum, leakage: np.ndarray, residual_db: float) -> np.ndarray:
     """(B, N) what cancelling the leakage (its spectrum ``leakage``, (B, n_sc)) may leave at each lag:
     its profile's power, ``residual_db`` below it."""
-    floor = np.zeros((leakage.shape[0], spec.fft_size))
+    level = 10.0 ** (residual_db / 10.0)
     known = np.flatnonzero(np.any(leakage != 0, axis=1))  # beams without a leakage estimate: nothing to leave
+    if len(known) == len(leakage):  # every beam: no copies
+        return level * np.abs(RangeSpectrum(leakage, spec.model, spec.p, spec.fft_size).profile()) ** 2
+    floor = np.zeros((leakage.shape[0], spec.fft_size))
     if len(known):
         profile = RangeSpectrum(leakage[known], spec.model[known], spec.p, spec.fft_size).profile()
-        floor[known] = 10.0 ** (residual_db / 10.0) * np.abs(profile) ** 2
+        floor[known] = level * np.abs(profile) ** 2
     return floor
 
 
@@ -215,7 +218,7 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
     for slot in range(1, m + 1):
         # only the beams still searching: a beam whose last search found nothing is done, its paths refined
         active = np.flatnonzero(searching)
-        sub = spec.rows(active)
+        sub = spec if len(active) == len(rows) else spec.rows(active)
         resid = sub.minus(sub.path_spectrum(np.nan_to_num(lag[active]), np.where(present[active], amp[active], 0.0)))
         profile = resid.profile()
         power = np.abs(profile) ** 2

@@ -56,7 +56,9 @@ class RangeSpectrum:
         first, count = int(self.p[0]) % n, len(self.p)  # contiguous subcarriers: two slices, wrapped at N
         head = min(count, n - first)
         bins[:, first:first + head], bins[:, :count - head] = self.s[:, :head], self.s[:, head:]
-        return sfft.ifft(bins, axis=1, norm="forward", workers=-1) / self.scale[:, None]
+        profile = sfft.ifft(bins, axis=1, norm="forward", workers=-1, overwrite_x=True)
+        profile /= self.scale[:, None]
+        return profile
 
     @cached_property
     def _signal_sums(self) -> LagSums:
