@@ -52,14 +52,13 @@ class StubCloser:
         return LikelihoodGrid.from_points(wall, 0.1, 0.05, 1.0, np.full(5, np.pi), np.radians(1.0), 0.5), None
 
 
-def fork_at_scan_3(closer: StubCloser, contradicted: bool = True):
+def fork_at_scan_3(closer: StubCloser, contradicted: bool = True, on_free: int = 10):
     """Scan 3 is ambiguous (the chosen pose walked on, the rival turned by 180°); scan 5 is then
-    observed, the chosen branch ``contradicted`` by the map before the fork or not. Returns the
-    decision and the estimates."""
+    observed, the chosen branch ``contradicted`` by the map before the fork (``on_free`` of its 400
+    points on its free space, the rival's none) or not. Returns the decision and the estimates."""
     forks = Forks.from_config(SlamConfig())
-    # the chosen branch 40 of 400 points on the map's free space, the rival's none; or neither's
     forks._on_free = lambda fork, k, estimates, loop_closer, jump=None: \
-        (40 if contradicted and jump is None else 0, 400)
+        (on_free if contradicted and jump is None else 0, 400)
     estimates = {k: p for k, p in enumerate(walk(6))}  # the chosen branch: straight on
     rival = compose(estimates[2], [0.0, 0.0, np.pi])
     for k in range(6):
@@ -89,6 +88,12 @@ def test_the_choice_stands_when_the_chosen_branch_closes_as_good_a_loop_or_nothi
     assert fork_at_scan_3(StubCloser(truth_5, 0.6, 0.55))[0] is None  # within fork_gain of the rival's 0.6
     assert fork_at_scan_3(StubCloser(truth_5, 0.6), contradicted=False)[0] is None  # nothing against the choice
     assert fork_at_scan_3(StubCloser(truth_5, 0.2))[0] is not None  # weight 1: score alone does not gate
+    # 10 of 400 against none (P = 1e-3) needs a rival loop; 40 against none (P = 1e-12, beyond the
+    # significance squared) decides alone: a walk's first corner taken for its corridor folded back
+    # onto itself matches the map from before as well as the corner, which explores and closes no loop
+    assert fork_at_scan_3(StubCloser(truth_5, 0.6, 0.55), on_free=40)[0] is not None
+    assert fork_at_scan_3(StubCloser(np.full(3, 99.0), 0.6), on_free=40)[0] is not None  # no rival loop at all
+    assert fork_at_scan_3(StubCloser(np.full(3, 99.0), 0.6), on_free=10)[0] is None
 
 
 def test_a_branch_is_contradicted_by_walls_where_the_map_before_the_fork_saw_through():
@@ -256,3 +261,29 @@ def test_a_weak_match_turned_from_the_prediction_keeps_it_as_a_rival_for_the_map
                for w in result.warnings)
     assert np.degrees(np.abs(wrap_angle(result.poses[:, 2] - result.poses[0, 2]))).max() < 3.0
     assert ate_rmse(result.poses, case.scene.poses) <= 0.35
+
+
+def test_a_walk_around_a_block_turns_its_first_corner():
+    """narrow-corridor (2.4 m wide around an 11.2 m × 4 m block), seed 1, the first 50 scans, recorded
+    (sensed by session 15's receiver). At scan 37, just into the side corridor, 16 of the scan's 37
+    points are that corridor's side walls, which no pose in the first corridor faced (specular walls
+    parallel to its lines of sight): the true pose scores 0.45, the first corridor turned back onto
+    itself 0.65, and that turn, seen in the scan, was taken (2.84 m over these 50 scans, 5.15 m over the
+    walk, silent). The motion's choice now stays a rival; the folded branch puts 10 of its next scan's 71
+    points where the terminal walked, the corner's branch none, and exploring it closes no loop: the
+    contradiction alone decides, two scans later."""
+    from radioslam.eval.trajectory_metrics import ate_rmse
+    from radioslam.scene import load_scene
+    from radioslam.sensing.pointcloud import Scan
+
+    recorded = np.load(Path(__file__).parent / "data" / "narrow-corridor-1-scans.npz")
+    ends = np.cumsum(recorded["counts"])
+    fields = ("range_m", "angle_rad", "power_db", "beam", "orientation")
+    scans = [Scan(*(recorded[f][end - count:end] for f in fields)) for end, count in zip(ends, recorded["counts"])]
+    truth = load_scene("narrow-corridor").poses[:len(scans)]
+    result = RadioSlam().run(scans)
+    assert result.status[37] is ScanStatus.AMBIGUOUS
+    assert any(w.startswith("scan 37:") and "rival taken" in w and "saw through" in w for w in result.warnings)
+    assert ate_rmse(result.poses, truth) <= 0.2
+    turn = wrap_angle(wrap_angle(result.poses[:, 2] - result.poses[0, 2]) - wrap_angle(truth[:, 2] - truth[0, 2]))
+    assert np.degrees(np.abs(turn)).max() < 3.0

@@ -174,7 +174,8 @@ class LoopClosureConfig(_Section):
     # and only once the chosen branch put this fraction of its points since the fork on space the map from
     # before it saw through (evidence against it: an exploring branch puts none there)
     fork_contradicted: float = Field(0.01, ge=0, le=1)
-    # and significantly more of them than the rival's branch put there (one-sided sign test, this p-value)
+    # and significantly more of them than the rival's branch put there (one-sided sign test, this p-value);
+    # at its square the contradiction decides alone, without a rival loop (an exploring rival closes none)
     fork_significance: float = Field(0.01, gt=0, lt=1)
 
 

@@ -145,11 +145,13 @@ class RadioSlam:
             decided = forks.observe(k, step.status, back_end.estimates, loop_closer)
             if decided is not None:
                 back_end.switch(decided.switches)
-                loops = [lc for lc in loops if lc.anchor >= decided.fork] + [decided.loop]
+                loops = [lc for lc in loops if lc.anchor >= decided.fork] + ([] if decided.loop is None else
+                                                                            [decided.loop])
                 lost_and_found.forget()
+                why = ("it matches the map from before far better" if decided.loop is not None else
+                       "the chosen branch put walls where the map from before saw through, the rival did not")
                 for key, _ in decided.switches:
-                    steps[key] = steps[key].noted(f"its rival taken at scan {k}: it matches the map from before "
-                                                  "far better")
+                    steps[key] = steps[key].noted(f"its rival taken at scan {k}: {why}")
             back_end.add_loops(loops + relocalizations)
             steps.append(step)
             seconds.append(time.perf_counter() - tick)

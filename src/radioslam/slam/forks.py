@@ -32,9 +32,16 @@ robot mapping", IJRR 2013: keep the alternatives, let the data pick one):
      alike and the test keeps the choice; where it looks alike only near the turn (a straight
      hall turned about its centre line) the scans after it, walking on, tell the branches apart.
 
+   Or, without a rival loop that decides (none, or none ``fork_gain`` better), when the
+   contradiction is overwhelming: the chosen branch's points on that free space against the
+   rival's pass the sign test at ``fork_significance``². An exploring rival closes no loop with
+   the old map: a walk's corner taken for its corridor folded back onto itself (narrow-corridor's
+   first corner: the folded branch matches the old map as well as the corner, whose new walls it
+   has not seen, and puts 10 of its next scan's 71 points where the terminal walked).
+
    Then the step into the fork scan is replaced by the rival's, which carries every later pose
-   by the jump (:meth:`radioslam.slam.back_end.BackEnd.switch`), and the rival loop joins the
-   graph.
+   by the jump (:meth:`radioslam.slam.back_end.BackEnd.switch`), and the rival loop, if any,
+   joins the graph.
 
 Both branches are judged by the map from before the fork, never by their own scans: a wrong
 branch builds a local map that agrees with itself.
@@ -83,7 +90,7 @@ class Fork:
 @dataclass(frozen=True)
 class Decision:
     switches: list[tuple[int, np.ndarray]]  # (ambiguous scan, jump onto its rival), latest first
-    loop: LoopClosure  # the rival loop that decided it (relative to the rival branch)
+    loop: LoopClosure | None  # the rival loop that decided it (relative to the rival branch); None: contradiction alone
 
     @property
     def fork(self) -> int:
@@ -138,14 +145,15 @@ class Forks:
         the terminal once walked or looked through. Counted over the whole stretch, not per scan."""
         return points > 0 and on_free >= self.cfg.fork_contradicted * points
 
-    def _contradicted_more(self, chosen: int, rival: int) -> bool:
+    def _contradicted_more(self, chosen: int, rival: int, significance: float | None = None) -> bool:
         """Whether the chosen branch has significantly more points on that free space (``chosen``) than the
         rival's (``rival``; a sign test): radio ghosts land on free space on either branch alike, a wrong
         branch's walls add to its own count. If the choice is right, the chosen branch's share of the
         T points on free space of both is at most Binomial(T, ½); the rival is evidenced when
         P(share ≥ observed) ≤ ``fork_significance`` (15 against 0: 3·10⁻⁵; a ghost a scan, 6 against 2:
         0.14)."""
-        return chosen > 0 and float(binom.sf(chosen - 1, chosen + rival, 0.5)) <= self.cfg.fork_significance
+        level = self.cfg.fork_significance if significance is None else significance
+        return chosen > 0 and float(binom.sf(chosen - 1, chosen + rival, 0.5)) <= level
 
     def hypotheses(self, k: int, estimates: dict[int, np.ndarray]):
         """(name, fork, switches, jump) for every rival branch to test at scan k: each open fork's rivals,
@@ -175,6 +183,7 @@ class Forks:
         self.chosen_scores = {key: s for key, s in self.chosen_scores.items() if key in open_keys}
         self.rival_loops = {name: lc for name, lc in self.rival_loops.items() if name[0] in open_keys}
         chosen_on_free: dict[int, tuple[int, int]] = {}  # per fork: the chosen branch's (on free space, points)
+        unlooped = []  # (rival's points on free space, fork, switches) of contradicted forks without a rival loop
         for name, fork, switches, jump in self.hypotheses(k, estimates):
             if fork.key not in chosen_on_free:
                 chosen_on_free[fork.key] = self._on_free(fork, k, estimates, loop_closer)
@@ -185,13 +194,23 @@ class Forks:
             if found is not None and found.weight >= self.cfg.fork_weight and \
                     (name not in self.rival_loops or found.score > self.rival_loops[name].score):
                 self.rival_loops[name] = found
+            on_free, points = chosen_on_free[fork.key]
+            if not self._contradicted(on_free, points):
+                continue
+            rival_on_free = self._on_free(fork, k, estimates, loop_closer, jump)[0]
             best = self.rival_loops.get(name)
             if best is None or best.score <= (1.0 + self.cfg.fork_gain) * self.chosen_scores[fork.key]:
+                # no rival loop: an exploring rival closes none (a corridor's corner taken for the corridor
+                # folded back onto itself); the contradiction alone decides, at the square of the significance
+                if self._contradicted_more(on_free, rival_on_free, self.cfg.fork_significance**2):
+                    unlooped.append((rival_on_free, fork.key, fork, switches))
                 continue
-            on_free, points = chosen_on_free[fork.key]
-            if not self._contradicted(on_free, points) or \
-                    not self._contradicted_more(on_free, self._on_free(fork, k, estimates, loop_closer, jump)[0]):
+            if not self._contradicted_more(on_free, rival_on_free):
                 continue  # the chosen branch disagrees with the map from before the fork no more than the rival
             self.open = [f for f in self.open if f.key < fork.key]
             return Decision(switches, best)
+        if unlooped:  # the rival the map from before contradicts least
+            _, _, fork, switches = min(unlooped, key=lambda u: u[:2])
+            self.open = [f for f in self.open if f.key < fork.key]
+            return Decision(switches, None)
         return None

@@ -137,6 +137,10 @@ class FrontEnd:
         # the motion decides what the scan cannot tell apart, and no more
         chosen, close = choose(candidates, scores, discount, cfg.ambiguity_margin, np.radians(cfg.distinct_deg),
                                cfg.min_match_score + cfg.trust_ramp)
+        # the motion's own choice among the candidates the scan supports (trusted scores)
+        supported = np.flatnonzero(scores >= cfg.min_match_score + cfg.trust_ramp)
+        by_motion = int(supported[np.argmin(discount[supported])]) if len(supported) else chosen
+        turned = abs(wrap_angle(candidates[chosen, 2] - candidates[by_motion, 2])) >= np.radians(cfg.distinct_deg)
         # rivals: what the scan alone cannot tell from the choice (within the margin of its score, or above);
         # those the motion could not tell apart either (``close``) widen the covariance
         alike = np.setdiff1d(np.flatnonzero(scores >= (1.0 - cfg.ambiguity_margin) * scores[chosen]), [chosen])
@@ -175,6 +179,14 @@ class FrontEnd:
             spread = undecided - pose
             spread[:, 2] = wrap_angle(spread[:, 2])
             cov = cov + spread.T @ spread / len(undecided)
+        if turned and not np.any(np.all(np.isclose(rivals, candidates[by_motion]), axis=1)):
+            # the scan took a pose turned from the motion's choice: that stays a rival for the map to decide
+            # (a corridor folded back onto itself explains a corner's scan better than the corner does,
+            # whose new walls the map has not seen yet)
+            rivals = np.vstack([rivals, candidates[by_motion]])
+            status = ScanStatus.AMBIGUOUS
+            turn = np.degrees(wrap_angle(pose[2] - candidates[by_motion, 2]))
+            note = "; ".join(filter(None, [note, f"turned {turn:.0f}° from the motion's choice, which stays a rival"]))
         if weight < 1.0:
             pose, cov = fuse(pose, cov, weight, primary, self.predicted)
             if abs(wrap_angle(primary[2] - pose[2])) >= np.radians(cfg.distinct_deg):
