@@ -26,7 +26,7 @@ import numpy as np
 
 from radioslam.antenna.codebook import nearest_beam_row
 from radioslam.capture import Capture
-from radioslam.config import bistatic_delay_s
+from radioslam.config import SPEED_OF_LIGHT, bistatic_delay_s
 from radioslam.sensing.config import SensingConfig
 from radioslam.sensing.detect import detect_single
 from radioslam.sensing.errors import SensingError
@@ -100,9 +100,11 @@ def estimate_hardware_delay(captures: list[Capture], ranges_m: np.ndarray, cfg: 
     ota = bistatic_delay_s(ranges_m, radio.array_baseline_m)
     half_gate = GATE_CELLS / radio.sample_rate_hz
     rows = [nearest_beam_row(cap.beam_angle_rad, 0.0) for cap in captures]  # the beams facing the targets
-    leakage = None if empty is None else measure_leakage(empty, cfg)  # absolute delays: T_H = 0 for them
-    # pass 1: the value of T1 + T2 − T_O most targets' peaks agree on (the leakage cancelled where measured)
-    blind = Receiver(radio, None if leakage is None else 0.0, cfg, leakage)
+    leakage = None if empty is None else measure_leakage(empty, cfg)  # absolute delays, T_H included
+    # pass 1: the value of T1 + T2 − T_O most targets' peaks agree on (the leakage cancelled where measured,
+    # T_H first taken where the leakage puts it: b/c before its median delay, where unfound beams' windows go)
+    first = None if leakage is None else float(np.median(leakage.delay_s)) - radio.array_baseline_m / SPEED_OF_LIGHT
+    blind = Receiver(radio, first, cfg, None if leakage is None else _after(leakage, first))
     guess = consensus([blind.beam_peaks(cap, row) - t_o for cap, row, t_o in zip(captures, rows, ota)],
                       0.5 / radio.sample_rate_hz)
     # pass 2 (twice): gate around T_H + T_O, leakage (at its measured delay, or T_H + b/c) cancelled jointly
