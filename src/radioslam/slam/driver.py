@@ -115,6 +115,9 @@ class RadioSlam:
             #    saw through) is searched for in the whole map: relocalized where the map explains it far better
             lost = lost + 1 if step.status is ScanStatus.PREDICTED else 0
             suspect = lost >= cfg.loop_closure.relocalize_after or contradiction.suspicious(step)
+            if suspect and step.status is not ScanStatus.PREDICTED and forks.contested(k, back_end.estimates,
+                                                                                      loop_closer):
+                suspect = False  # an open fork the map contradicts the choice of decides first (step 8)
             found = loop_closer.relocalize(k, points, back_end.estimates, k - lost) if suspect else None
             if found is not None and (step.status is ScanStatus.PREDICTED or contradiction.better(found.score, step)):
                 step = front_end.relocalized(back_end.relocalized_pose(found), found.score)

@@ -155,6 +155,13 @@ class Forks:
         level = self.cfg.fork_significance if significance is None else significance
         return chosen > 0 and float(binom.sf(chosen - 1, chosen + rival, 0.5)) <= level
 
+    def contested(self, k: int, estimates: dict[int, np.ndarray], loop_closer: LoopCloser) -> bool:
+        """Whether an open fork's chosen branch already put ``fork_contradicted`` of its points since the
+        fork on space the map from before saw through (scans up to k − 1): a scan k that contradicts
+        the map too is then that fork's to decide, not a relocalization's."""
+        return any(self._contradicted(*self._on_free(f, k - 1, estimates, loop_closer)) for f in self.open
+                   if f.key < k)
+
     def hypotheses(self, k: int, estimates: dict[int, np.ndarray]):
         """(name, fork, switches, jump) for every rival branch to test at scan k: each open fork's rivals,
         and each pair of forks' rivals together (a second ambiguous turn inside the first's memory: in the
