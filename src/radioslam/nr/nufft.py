@@ -32,7 +32,7 @@ import scipy.fft as sfft
 from numpy.polynomial import chebyshev
 from scipy.special import i0e
 
-from radioslam.nr.ofdm import contiguous_subcarriers
+from radioslam.nr.ofdm import contiguous_subcarriers, place_in_bins
 
 KERNEL_WIDTH = 20  # grid points per lag
 MIN_OVERSAMPLING = 1.25  # the fine grid n_f is N·2^k with at least this many points per subcarrier
@@ -87,11 +87,9 @@ class LagSums:
         self.width = KERNEL_WIDTH
         self.beta = float(np.pi * np.sqrt(self.width**2 * (1.0 - 0.5 / sigma) ** 2 - 0.8))
         q0 = p0 - self.centre
-        bins = np.zeros((values.shape[0], self.size), dtype=np.complex128)
-        first, head = q0 % self.size, min(n, self.size - q0 % self.size)  # q mod n_f: two slices
         weighted = values * _deconvolution(q0, n, self.size, self.width, self.beta)
-        bins[:, first:first + head], bins[:, :n - head] = weighted[:, :head], weighted[:, head:]
-        self.grid = sfft.ifft(bins, axis=1, norm="forward", workers=-1)  # G (B, n_f)
+        bins = place_in_bins(weighted, q0, self.size)
+        self.grid = sfft.ifft(bins, axis=1, norm="forward", workers=-1, overwrite_x=True)  # G (B, n_f)
         self.table = kernel_table(self.width, self.beta, POLYNOMIAL_DEGREE)
         self.taps = np.arange(1 - self.width // 2, 1 + self.width // 2)
 

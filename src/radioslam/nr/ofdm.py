@@ -77,13 +77,19 @@ def summed_phase_ramps(shift: np.ndarray, weight: np.ndarray, subcarriers: np.nd
     return (weighted.transpose(0, 2, 1) @ fine).reshape(coarse.shape[0], -1)[:, :n]
 
 
+def place_in_bins(values: np.ndarray, first: int, size: int, dtype=np.complex128) -> np.ndarray:
+    """Values (..., n) of the contiguous subcarriers first … first + n − 1 in ``size`` FFT bins (..., size),
+    zeros elsewhere: subcarrier p in bin p mod size, by two slices (a fancy index is ten times slower)."""
+    bins = np.zeros((*values.shape[:-1], size), dtype=dtype)
+    count, start = values.shape[-1], first % size
+    head = min(count, size - start)
+    bins[..., start:start + head], bins[..., :count - head] = values[..., :head], values[..., head:]
+    return bins
+
+
 def to_fft_bins(grid: np.ndarray, numerology: Numerology, dtype=np.complex128) -> np.ndarray:
     """Place active-subcarrier values (..., n_sc) into FFT bins (..., N), DC-centred."""
-    bins = np.zeros((*grid.shape[:-1], numerology.fft_size), dtype=dtype)
-    negative = numerology.n_subcarriers // 2
-    bins[..., numerology.fft_size - negative:] = grid[..., :negative]
-    bins[..., :numerology.n_subcarriers - negative] = grid[..., negative:]
-    return bins
+    return place_in_bins(grid, -(numerology.n_subcarriers // 2), numerology.fft_size, dtype)
 
 
 def modulate(grid: np.ndarray, cp_lengths: np.ndarray, numerology: Numerology) -> np.ndarray:

@@ -59,11 +59,16 @@ class PairKernels:
         return cls(*kernels)
 
 
+def present_gram(gram: np.ndarray, present: np.ndarray) -> np.ndarray:
+    """The Gram matrices (B, M, M) of the present paths, with an identity row and column for each absent one
+    (its amplitude solves to 0), ridge-loaded."""
+    both = present[:, :, None] & present[:, None, :]
+    return ridge(np.where(both, gram, 0.0) + np.eye(gram.shape[1])[None] * (~present)[:, :, None])
+
+
 def solve_amplitudes(gram: np.ndarray, rhs: np.ndarray, present: np.ndarray) -> np.ndarray:
     """Least-squares amplitudes (B, M) from the Gram matrix and ⟨e_i, S⟩; absent paths get 0."""
-    both = present[:, :, None] & present[:, None, :]
-    gram = np.where(both, gram, 0.0) + np.eye(gram.shape[1])[None] * (~present)[:, :, None]
-    return np.linalg.solve(ridge(gram), (rhs * present)[..., None])[..., 0]
+    return np.linalg.solve(present_gram(gram, present), (rhs * present)[..., None])[..., 0]
 
 
 def joint_amplitudes(spec: RangeSpectrum, rows: np.ndarray, lag: np.ndarray, present: np.ndarray) -> np.ndarray:
@@ -78,11 +83,10 @@ def gauss_newton_step(spec: RangeSpectrum, rows: np.ndarray, lag: np.ndarray, pr
     """One variable-projection Gauss–Newton step (R, M) of the lags (R, M) of ``spec``'s ``rows`` (R,)."""
     f, f_prime = spec.with_derivatives(lag, rows, order=1) * spec.scale[rows][None, :, None]  # ⟨e_i, S⟩, ∂/∂t_i
     kern = PairKernels.at(spec, lag, rows)
-    amp = solve_amplitudes(kern.k0, f, present)
-    both = present[:, :, None] & present[:, None, :]
-    gram = np.where(both, kern.k0, 0.0) + np.eye(lag.shape[1])[None] * (~present)[:, :, None]
+    gram = present_gram(kern.k0, present)
+    amp = np.linalg.solve(gram, (f * present)[..., None])[..., 0]  # :func:`solve_amplitudes`
     cross = -kern.k1 * amp[:, None, :] * present[:, :, None]  # ⟨m e_i, d_k⟩ / m
-    projected = np.linalg.solve(ridge(gram), cross)  # the amplitudes' span, projected out
+    projected = np.linalg.solve(gram, cross)  # the amplitudes' span, projected out
     hess = (-amp.conj()[:, :, None] * amp[:, None, :] * kern.k2 - cross.conj().transpose(0, 2, 1) @ projected).real
     grad = (amp.conj() * (f_prime - (kern.k1 @ amp[..., None])[..., 0])).real
     hess = hess * movable[:, :, None] * movable[:, None, :] + np.eye(lag.shape[1])[None] * (~movable)[:, :, None]

@@ -20,7 +20,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from radioslam.nr.nufft import LagSums
-from radioslam.nr.ofdm import summed_phase_ramps
+from radioslam.nr.ofdm import place_in_bins, summed_phase_ramps
 from radioslam.sensing.config import Taper
 from radioslam.sensing.estimate import ChannelEstimate
 
@@ -51,11 +51,7 @@ class RangeSpectrum:
 
     def profile(self) -> np.ndarray:
         """F at the N integer lags (B, N), complex (the subcarriers are contiguous)."""
-        n = self.fft_size
-        bins = np.zeros((self.s.shape[0], n), dtype=np.result_type(self.s.dtype, np.complex64))
-        first, count = int(self.p[0]) % n, len(self.p)  # contiguous subcarriers: two slices, wrapped at N
-        head = min(count, n - first)
-        bins[:, first:first + head], bins[:, :count - head] = self.s[:, :head], self.s[:, head:]
+        bins = place_in_bins(self.s, int(self.p[0]), self.fft_size, np.result_type(self.s.dtype, np.complex64))
         profile = sfft.ifft(bins, axis=1, norm="forward", workers=-1, overwrite_x=True)
         profile /= self.scale[:, None]
         return profile
