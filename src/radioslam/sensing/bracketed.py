@@ -20,7 +20,8 @@ skirt) the true maximum on the other side is never looked at. Here both sides ar
    bracket's midpoint. Quadratic convergence: three steps take 1/8 sample to below 10⁻⁴.
 3. The highest refined contender is the peak.
 
-Vectorized over every contender: one blocked evaluation of F, F′, F″ per Newton step.
+Vectorized over every contender: one evaluation of F, F′, F″ per Newton step
+(:class:`~radioslam.nr.nufft.LagSums`).
 """
 
 from __future__ import annotations
