@@ -28,7 +28,7 @@ import scipy.signal as ss
 from radioslam.scene import load_scene
 from radioslam.sensing import Receiver, Refinement, SensingConfig
 from radioslam.sensing.bisection import neighbour_values
-from radioslam.sensing.detect import leakage_cancelled, local_maxima, strongest
+from radioslam.sensing.detect import leakage_cancelled, strongest
 from radioslam.sensing.profile import RangeSpectrum, pdp_spectrum, signed_lag
 from radioslam.sensing.refiner import PeakRefiner
 from radioslam.sim import Simulator
@@ -74,7 +74,10 @@ def echo_peaks(spec: RangeSpectrum, receiver: Receiver, capture, offset: np.ndar
         spec = leakage_cancelled(spec, gate)
     profile = spec.profile()
     power = np.abs(profile) ** 2
-    peaks, ok = strongest(power, local_maxima(power) & gate.mask(spec.fft_size), 1)
+    window = gate.window(spec.fft_size)
+    candidate, gated_power = window.maxima(power, -np.inf)
+    cells, ok = strongest(gated_power, candidate, 1)
+    peaks = window.inner[cells]
     rows = np.flatnonzero(ok[:, 0])
     sub = spec.rows(rows)
     return sub, signed_lag(peaks[rows], spec.fft_size), neighbour_values(profile[rows], peaks[rows])

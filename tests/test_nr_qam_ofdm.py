@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 
 from radioslam.nr import Numerology, demodulate, modulate, qam16_demodulate, qam16_modulate, random_bits
 from radioslam.nr.ofdm import from_fft_bins, symbol_starts, to_fft_bins
+from radioslam.nr.qam import qam16_energy
 
 
 def test_qam16_table_of_38_211():
@@ -91,3 +92,13 @@ def test_from_fft_bins_inverts_to_fft_bins(rng):
     grid = rng.standard_normal((2, 792)) + 0j
     assert np.array_equal(from_fft_bins(to_fft_bins(grid, num), num), grid)
     assert np.array_equal(from_fft_bins(np.arange(1024), num), np.arange(1024)[num.fft_bins()])
+
+
+def test_qam16_conjugates_and_energies_are_those_of_the_symbols(rng):
+    bits = random_bits(rng, (3, 5, 4 * 11))  # an odd symbol count too
+    for dtype in (np.complex64, np.complex128):
+        symbols = qam16_modulate(bits, dtype)
+        assert np.array_equal(qam16_modulate(bits, dtype, conjugate=True), symbols.conj())
+        energy = qam16_energy(bits, symbols.real.dtype)
+        assert np.array_equal(energy, symbols.real**2 + symbols.imag**2)
+    assert set(np.round(np.unique(qam16_energy(bits, np.float64)), 12)) <= {0.2, 1.0, 1.8}

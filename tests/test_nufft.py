@@ -80,3 +80,16 @@ def test_summed_phase_ramps_equal_the_weighted_sum_of_ramps(rng):
     weights = rng.standard_normal((4, 3)) + 1j * rng.standard_normal((4, 3))
     expected = np.einsum("bk,bkp->bp", weights, phase_ramp(lags, p, 1024))
     assert np.allclose(summed_phase_ramps(lags, weights, p, 1024), expected, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("p, n", [(np.arange(-396, 396), 1024), (np.arange(-410, 410), 1024)])
+def test_a_run_of_integer_spaced_lags_equals_the_general_evaluation_and_the_direct_sums(rng, p, n):
+    x = rng.standard_normal((4, len(p))) + 1j * rng.standard_normal((4, len(p)))
+    sums = LagSums(x, p, n)
+    start = rng.uniform(-n, n, 4)
+    lags = start[:, None] + np.arange(37)
+    run = sums.run(start, 37)
+    assert np.array_equal(run, sums(lags)[0])  # the same taps and weights, only shared
+    assert np.abs(run - direct(x, p, n, lags, 0)[0]).max() <= TOLERANCE[0] * np.abs(x).sum(axis=1).max()
+    rows = np.array([2, 0])
+    assert np.array_equal(sums.run(start[:2], 5, rows), sums(lags[:2, :5], rows)[0])

@@ -3,6 +3,8 @@ the CRB, Fig. 5/8 physics, multi-target detection on glass-door, and bad input."
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from radioslam.capture import CaptureMode
 from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
@@ -11,9 +13,10 @@ from radioslam.scene import load_scene
 from radioslam.scene.geometry import point_segment_distance
 from radioslam.sensing import Detector, PointFilter, Receiver, SensingConfig, estimate_hardware_delay
 from radioslam.sensing.bisection import bisect_peaks, iterations_for, neighbour_values
-from radioslam.sensing.cfar import cfar_threshold
+from radioslam.sensing.cfar import cfar_threshold, row_median
 from radioslam.sensing.config import CfarKind
-from radioslam.sensing.profile import RangeSpectrum
+from radioslam.sensing.detect import LagGate
+from radioslam.sensing.profile import RangeSpectrum, divide_by_real, signed_lag
 from radioslam.sensing.sync import coarse_sync
 from radioslam.sim import Simulator
 from radioslam.sim.calibration_targets import calibration_ranges, simulate_calibration_captures
@@ -110,6 +113,44 @@ def test_cfar_false_alarm_rate_matches_its_design():
     for kind in CfarKind:
         rate = np.mean(noise > cfar_threshold(noise, kind, 2, 16, 1e-3))
         assert 0.5e-3 < rate < 2e-3, (kind, rate)
+
+
+@given(st.integers(1, 300), st.integers(1, 4), st.integers(0, 2**32 - 1))
+@settings(max_examples=40, deadline=None)
+def test_the_noise_floors_median_is_numpys(n, rows, seed):
+    values = np.random.default_rng(seed).exponential(size=(rows, n))
+    values[:, ::3] = values[:, :1]  # ties
+    assert np.array_equal(row_median(values), np.median(values, axis=-1))
+
+
+def test_dividing_by_a_real_divisor_in_place_divides_each_part():
+    rng = np.random.default_rng(3)
+    values = rng.standard_normal((5, 64)) + 1j * rng.standard_normal((5, 64))
+    divisor = rng.uniform(0.1, 10.0, 5)
+    complex_division = values / divisor[:, None]
+    parts = values.real / divisor[:, None], values.imag / divisor[:, None]
+    divide_by_real(values, divisor)
+    assert np.array_equal(values.real, parts[0]) and np.array_equal(values.imag, parts[1])
+    np.testing.assert_array_max_ulp(values.real, complex_division.real, maxulp=1)
+    np.testing.assert_array_max_ulp(values.imag, complex_division.imag, maxulp=1)
+
+
+@pytest.mark.parametrize("low, high", [((30.2, 34.6, 26.0), (62.9, 66.95, 58.0)),  # the range gate
+                                       ((-5.5, -3.0, 2.0), (4.0, 9.5, 7.0)),  # around lag 0: wraps
+                                       ((-512.0, -511.5, -600.0), (512.0, 512.5, 600.0))])  # wider than N
+def test_the_gates_window_holds_the_same_local_maxima_as_the_whole_profile(low, high):
+    n = 1024
+    power = np.random.default_rng(5).exponential(size=(3, n))
+    gate = LagGate(np.array(low), np.array(high), np.full(3, np.nan))
+    floor = np.full((3, 1), 1.5)
+    whole = ((power > np.roll(power, 1, axis=1)) & (power >= np.roll(power, -1, axis=1))
+             & gate.contains(signed_lag(np.arange(n), n)[None, :]) & (power > floor))
+    window = gate.window(n)
+    found, gated_power = window.maxima(power, floor)
+    rows, cells = np.nonzero(found)
+    assert len(set(window.inner)) == len(window.inner)  # each column once
+    assert sorted(zip(rows, window.inner[cells])) == sorted(zip(*np.nonzero(whole)))
+    assert np.array_equal(gated_power[rows, cells], power[rows, window.inner[cells]])
 
 
 def test_multi_target_mode_finds_the_glass_door_and_the_wall_behind_it():

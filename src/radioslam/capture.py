@@ -26,7 +26,7 @@ from radioslam.config import RadioConfig
 from radioslam.errors import RadioslamError
 from radioslam.nr.numerology import Numerology
 from radioslam.nr.ofdm import symbol_starts
-from radioslam.nr.qam import qam16_modulate
+from radioslam.nr.qam import qam16_energy, qam16_modulate
 
 
 class CaptureMode(str, Enum):
@@ -65,9 +65,13 @@ class Capture:
     def numerology(self) -> Numerology:
         return Numerology.from_config(self.radio)
 
-    def tx_symbols(self, dtype=np.complex128) -> np.ndarray:
-        """The transmitted 16-QAM sensing symbols (B, R, n_sc)."""
-        return qam16_modulate(self.tx_bits, dtype)
+    def tx_symbols(self, dtype=np.complex128, conjugate: bool = False) -> np.ndarray:
+        """The transmitted 16-QAM sensing symbols (B, R, n_sc), or their conjugates."""
+        return qam16_modulate(self.tx_bits, dtype, conjugate=conjugate)
+
+    def tx_energy(self, dtype=np.float32) -> np.ndarray:
+        """|x|² (B, R, n_sc) of the transmitted sensing symbols."""
+        return qam16_energy(self.tx_bits, dtype)
 
     def cp_lengths(self) -> np.ndarray:
         """CP length (B, 1 + R) of every symbol in each beam's window."""

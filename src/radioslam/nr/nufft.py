@@ -29,6 +29,7 @@ from functools import lru_cache
 
 import numpy as np
 import scipy.fft as sfft
+from numpy.lib.stride_tricks import sliding_window_view
 from numpy.polynomial import chebyshev
 from scipy.special import i0e
 
@@ -97,16 +98,42 @@ class LagSums:
         """F and its lag derivatives up to ``order`` (≤ 2) at lags (B, K), or of ``rows`` (R,) at lags
         (R, K): (order + 1, R, K)."""
         lags = np.asarray(lags, dtype=np.float64)
-        index = np.arange(len(self.grid)) if rows is None else np.asarray(rows)
         s = lags * self.upsample
         base = np.floor(s)
-        angle = np.arccos(2.0 * (s - base) - 1.0)  # T_k(y) = cos(k·arccos y): the basis (R, K, D + 1)
-        basis = np.cos(angle[..., None] * np.arange(len(self.table)))
-        kernels = (basis @ self.table[:, :order + 1].reshape(len(self.table), -1)).reshape(
-            *s.shape, order + 1, self.width)
         taps = (base.astype(np.int64)[..., None] + self.taps) % self.size  # (R, K, W)
-        g = self.grid[index[:, None, None], taps]
-        h = np.einsum("rkw,rkdw->drk", g, kernels) * (self.upsample ** np.arange(order + 1))[:, None, None]
+        h = np.einsum("rkw,rkdw->drk", self._at_taps(taps, rows), self._weights(s - base, order))
+        return self._from_centre(h, lags, order)
+
+    def run(self, start: np.ndarray, count: int, rows: np.ndarray | None = None) -> np.ndarray:
+        """F at the lags start, start + 1, …, start + count − 1 of each row (start (R,)): (R, count). Lags an
+        integer apart share their fraction, so the kernel's weights are computed once per row, and their
+        taps are windows of one contiguous stretch of the grid."""
+        start = np.asarray(start, dtype=np.float64)
+        s = start * self.upsample
+        base = np.floor(s)
+        span = (count - 1) * self.upsample + self.width
+        stretch = (base.astype(np.int64)[:, None] + (self.taps[0] + np.arange(span))) % self.size
+        g = sliding_window_view(self._at_taps(stretch, rows), self.width, axis=1)[:, ::self.upsample]  # (R, C, W)
+        h = (g @ self._weights(s - base, 0)[:, 0, :, None])[..., 0]
+        return self._from_centre(h[None], start[:, None] + np.arange(count), 0)[0]
+
+    def _weights(self, fraction: np.ndarray, order: int) -> np.ndarray:
+        """The kernel and its derivatives up to ``order`` at the W taps of grid fractions (...) in [0, 1):
+        (..., order + 1, W), from the Chebyshev table."""
+        angle = np.arccos(2.0 * fraction - 1.0)  # T_k(y) = cos(k·arccos y): the basis (..., D + 1)
+        basis = np.cos(angle[..., None] * np.arange(len(self.table)))
+        return (basis @ self.table[:, :order + 1].reshape(len(self.table), -1)).reshape(
+            *fraction.shape, order + 1, self.width)
+
+    def _at_taps(self, taps: np.ndarray, rows: np.ndarray | None) -> np.ndarray:
+        """G at the grid points ``taps`` (R, ...) of each row."""
+        index = np.arange(len(self.grid)) if rows is None else np.asarray(rows)
+        return self.grid[index.reshape(-1, *(1,) * (taps.ndim - 1)), taps]
+
+    def _from_centre(self, h: np.ndarray, lags: np.ndarray, order: int) -> np.ndarray:
+        """F and its derivatives (order + 1, R, K) from H, the sums about the band's centre (per unit of
+        the fine grid)."""
+        h = h * (self.upsample ** np.arange(order + 1))[:, None, None]
         # F = e·H with e = e^{jω_c t}: the product rule for the band's centre
         jw = 2j * np.pi * self.centre / self.period
         if jw == 0:

@@ -8,21 +8,35 @@ BITS_PER_SYMBOL = 4
 _SCALE = 1.0 / np.sqrt(10.0)
 
 
-def qam16_modulate(bits: np.ndarray, dtype=np.complex128, out: np.ndarray | None = None) -> np.ndarray:
+def qam16_modulate(bits: np.ndarray, dtype=np.complex128, out: np.ndarray | None = None,
+                   conjugate: bool = False) -> np.ndarray:
     """Map bits (..., 4k) of 0/1 to 16-QAM symbols (..., k), into ``out`` if given (any array of that
-    shape whose last axis is contiguous, e.g. a slice of a larger grid: no temporary).
+    shape whose last axis is contiguous, e.g. a slice of a larger grid: no temporary); their complex
+    conjugates with ``conjugate`` (what a matched filter multiplies by, without a second pass).
 
     d = [(1−2b0)(2−(1−2b2)) + j(1−2b1)(2−(1−2b3))] / √10, 38.211 §5.1.4.
     """
+    pairs = _PAIRS.astype(dtype if out is None else out.dtype, copy=False)
+    return _map_pairs(bits, pairs.conj() if conjugate else pairs, out)
+
+
+def qam16_energy(bits: np.ndarray, dtype=np.float32) -> np.ndarray:
+    """|d|² (..., k) of the 16-QAM symbols of bits (..., 4k): 0.2, 1 or 1.8, the same values as
+    ``|qam16_modulate(bits, complex dtype)|²`` computed in ``dtype`` (re² + im² of the rounded parts)."""
+    parts = _PAIRS.astype(np.result_type(dtype, np.complex64))
+    return _map_pairs(bits, (parts.real**2 + parts.imag**2).astype(dtype, copy=False), None)
+
+
+def _map_pairs(bits: np.ndarray, pairs: np.ndarray, out: np.ndarray | None) -> np.ndarray:
+    """Look up each byte's two symbols in ``pairs`` (256, 2)."""
     b = np.asarray(bits, dtype=np.uint8)
     if b.shape[-1] % BITS_PER_SYMBOL:
         raise ValueError("the bit count must be a multiple of 4")
     if b.shape[-1] % 8:  # an odd symbol count: pad one symbol, drop it after mapping
         padded = np.concatenate([b, np.zeros((*b.shape[:-1], BITS_PER_SYMBOL), np.uint8)], axis=-1)
-        return qam16_modulate(padded, dtype)[..., :-1]
+        return _map_pairs(padded, pairs, None)[..., :-1]
     # packbits puts two symbols' b0b1b2b3 into one byte: the high nibble, then the low one
     packed = np.packbits(b, axis=-1)
-    pairs = _PAIRS.astype(dtype if out is None else out.dtype, copy=False)
     if out is None:
         return np.take(pairs, packed, axis=0).reshape(*packed.shape[:-1], -1)
     target = out.view()

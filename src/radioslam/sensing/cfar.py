@@ -19,9 +19,18 @@ from scipy.optimize import brentq
 from radioslam.sensing.config import CfarKind
 
 
+def row_median(values: np.ndarray) -> np.ndarray:
+    """``np.median`` along the last axis, the same values, by one partition: for an even count the
+    lower middle value is the largest of the lower half (np.median partitions at both)."""
+    n = values.shape[-1]
+    ordered = np.partition(values, n // 2, axis=-1)
+    upper = ordered[..., n // 2]
+    return upper if n % 2 else 0.5 * (ordered[..., :n // 2].max(axis=-1) + upper)
+
+
 def noise_floor(power: np.ndarray) -> np.ndarray:
     """Mean noise power per row (B,), from the median of exponentially distributed cells."""
-    return np.median(power, axis=-1) / np.log(2.0)
+    return row_median(power) / np.log(2.0)
 
 
 def noise_threshold(power: np.ndarray, pfa: float) -> np.ndarray:

@@ -60,20 +60,45 @@ class LagGate:
     high: np.ndarray
     leakage: np.ndarray
 
-    def mask(self, fft_size: int) -> np.ndarray:
-        """(B, N): which integer lags lie in the gate."""
-        return self.contains(signed_lag(np.arange(fft_size), fft_size)[None, :])
-
     def contains(self, lag: np.ndarray) -> np.ndarray:
         return (lag >= self.low[:, None]) & (lag <= self.high[:, None])
 
+    def window(self, fft_size: int) -> "GateWindow":
+        """The integer lags that any beam's gate holds (a few dozen of the N: 40 m is 33 samples)."""
+        low, high = int(np.floor(np.nanmin(self.low))), int(np.ceil(np.nanmax(self.high)))
+        lags = np.arange(low - 1, min(high, low + fft_size - 1) + 2)  # each column once, a neighbour either side
+        inner = lags[1:-1]
+        return GateWindow(lags % fft_size, inner.astype(np.float64),
+                          self.contains(signed_lag(inner, fft_size)[None, :]))
 
-def local_maxima(power: np.ndarray) -> np.ndarray:
-    return (power > np.roll(power, 1, axis=1)) & (power >= np.roll(power, -1, axis=1))
+
+@dataclass(frozen=True)
+class GateWindow:
+    """The FFT columns (C + 2,) of the lags lo − 1 … hi + 1 around every beam's gate, the inner C lags
+    (consecutive), and which of them each beam's gate holds (B, C): peaks are searched there only,
+    the rest of the profile serves the noise floor and the CFAR training cells."""
+
+    columns: np.ndarray
+    lags: np.ndarray
+    allowed: np.ndarray
+
+    @property
+    def inner(self) -> np.ndarray:
+        return self.columns[1:-1]
+
+    def rows(self, rows: np.ndarray) -> "GateWindow":
+        return GateWindow(self.columns, self.lags, self.allowed[rows])
+
+    def maxima(self, power: np.ndarray, floor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Of a profile's power (B, N): the gated local maxima above ``floor`` (B, C), and the power there
+        (B, C)."""
+        around = power[:, self.columns]
+        here = around[:, 1:-1]
+        return (here > around[:, :-2]) & (here >= around[:, 2:]) & self.allowed & (here > floor), here
 
 
 def strongest(power: np.ndarray, allowed: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """The k largest allowed cells per beam, strongest first: integer lags (B, k) and whether each exists."""
+    """The k largest allowed cells per beam, strongest first: their indices (B, k) and whether each exists."""
     masked = np.where(allowed, power, -np.inf)
     rows = np.arange(len(power))
     idx = np.empty((len(power), k), dtype=np.int64)
@@ -145,18 +170,13 @@ def _with_leakage(spec: RangeSpectrum, gate: LagGate, slots: int):
     return lag, amp, present, fixed
 
 
-def residual_floor(spec: RangeSpectrum, leakage: np.ndarray, residual_db: float) -> np.ndarray:
-    """(B, N) what cancelling the leakage (its spectrum ``leakage``, (B, n_sc)) may leave at each lag:
-    its profile's power, ``residual_db`` below it."""
-    level = 10.0 ** (residual_db / 10.0)
-    known = np.flatnonzero(np.any(leakage != 0, axis=1))  # beams without a leakage estimate: nothing to leave
-    if len(known) == len(leakage):  # every beam: no copies
-        return level * np.abs(RangeSpectrum(leakage, spec.model, spec.p, spec.fft_size).profile()) ** 2
-    floor = np.zeros((leakage.shape[0], spec.fft_size))
-    if len(known):
-        profile = RangeSpectrum(leakage[known], spec.model[known], spec.p, spec.fft_size).profile()
-        floor[known] = level * np.abs(profile) ** 2
-    return floor
+def leakage_floor(spec: RangeSpectrum, window: GateWindow, lag: np.ndarray, amp: np.ndarray,
+                  residual_db: float) -> np.ndarray:
+    """(B, C) what cancelling the leakage (lag and amplitude (B,), 0: none) may leave at the window's lags:
+    its profile's power there, |a·K(t − t_L)/Σm|², ``residual_db`` below it."""
+    start = window.lags[0] - np.nan_to_num(lag)  # the window's lags are consecutive
+    response = amp[:, None] * spec.kernel_run(start, len(window.lags)) / spec.scale[:, None]
+    return 10.0 ** (residual_db / 10.0) * np.abs(response) ** 2
 
 
 def leakage_cancelled(spec: RangeSpectrum, gate: LagGate) -> RangeSpectrum:
@@ -176,16 +196,18 @@ def pdp_peaks(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner: P
     refined peak is wanted, since refinement recovers at most the straddle loss.
     """
     lag, amp, present, fixed = _with_leakage(spec, gate, 1)
-    leakage = spec.path_spectrum(np.nan_to_num(lag[:, :1]), amp[:, :1])
-    resid = spec.minus(leakage)
-    profile = resid.profile()
+    profile = spec.minus(spec.path_spectrum(np.nan_to_num(lag[:, :1]), amp[:, :1])).profile()
     power = np.abs(profile) ** 2
     n = spec.fft_size
-    floor = noise_threshold(power, cfg.noise_pfa) + residual_floor(spec, leakage, cfg.leakage_residual_db)
-    peaks, ok = strongest(power, local_maxima(power) & gate.mask(n) & (power > floor), cfg.peaks)
+    window = gate.window(n)
+    floor = noise_threshold(power, cfg.noise_pfa) + leakage_floor(spec, window, lag[:, 0], amp[:, 0],
+                                                                  cfg.leakage_residual_db)
+    candidate, gated_power = window.maxima(power, floor)
+    cells, ok = strongest(gated_power, candidate, cfg.peaks)
+    peaks = window.inner[cells]
     active = ok
     if contenders_db is not None:
-        peak_power = np.take_along_axis(power, peaks, axis=1)
+        peak_power = np.take_along_axis(gated_power, cells, axis=1)
         active = ok & (peak_power >= peak_power[:, :1] * 10 ** (-contenders_db / 10))
     cancelled = CancelledSpectrum(spec, np.arange(spec.beam_count), lag[:, :1], amp[:, :1])
     refined = refiner.refine(cancelled, signed_lag(peaks, n), neighbour_values(profile, peaks), active)
@@ -211,9 +233,8 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
     m = cfg.max_targets
     lag, amp, present, fixed = _with_leakage(spec, gate, m)
     n, rows = spec.fft_size, np.arange(spec.s.shape[0])
-    allowed_lags = gate.mask(n)
-    leakage_floor = residual_floor(spec, spec.path_spectrum(np.nan_to_num(lag[:, :1]), amp[:, :1]),
-                                   cfg.leakage_residual_db)
+    window = gate.window(n)
+    floor_of_leakage = leakage_floor(spec, window, lag[:, 0], amp[:, 0], cfg.leakage_residual_db)
     searching = np.ones(len(rows), dtype=bool)
     spent = 0
     for slot in range(1, m + 1):
@@ -224,12 +245,13 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
         profile = resid.profile()
         power = np.abs(profile) ** 2
         # CFAR only where it can matter: the local maxima in the gate above the noise threshold
-        floor = noise_threshold(power, cfg.noise_pfa) + leakage_floor[active]
-        candidate = local_maxima(power) & allowed_lags[active] & (power > floor)
+        floor = noise_threshold(power, cfg.noise_pfa) + floor_of_leakage[active]
+        candidate, gated_power = window.rows(active).maxima(power, floor)
         cells = np.nonzero(candidate)
-        candidate[cells] = power[cells] > cfar_threshold(power, cfg.cfar, cfg.cfar_guard, cfg.cfar_train,
-                                                         cfg.cfar_pfa, cells)
-        peaks, ok = strongest(power, candidate, 1)
+        candidate[cells] = gated_power[cells] > cfar_threshold(power, cfg.cfar, cfg.cfar_guard, cfg.cfar_train,
+                                                               cfg.cfar_pfa, (cells[0], window.inner[cells[1]]))
+        best, ok = strongest(gated_power, candidate, 1)
+        peaks = window.inner[best]
         found = ok[:, 0]
         searching[active] = found
         if not found.any():

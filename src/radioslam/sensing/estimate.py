@@ -47,7 +47,6 @@ def received_symbols(capture: Capture, window_offset: np.ndarray) -> np.ndarray:
 def estimate_channel(capture: Capture, window_offset: np.ndarray, symbols: slice = slice(None)) -> ChannelEstimate:
     """Z, W over the sensing symbols selected by ``symbols`` (all R by default)."""
     y = received_symbols(capture, window_offset)[:, symbols]
-    x = capture.tx_symbols(y.dtype)[:, symbols]
-    z = (y * x.conj()).sum(axis=1)
-    w = (x.real**2 + x.imag**2).sum(axis=1)
+    z = (y * capture.tx_symbols(y.dtype, conjugate=True)[:, symbols]).sum(axis=1)
+    w = capture.tx_energy(y.real.dtype)[:, symbols].sum(axis=1)
     return ChannelEstimate(z, w, np.asarray(window_offset, dtype=np.int64))

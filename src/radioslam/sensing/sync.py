@@ -58,7 +58,10 @@ def coarse_sync(capture: Capture, decimation: int = 4, pfa: float = 1e-6) -> Syn
     search -= search % decimation
     # decimate: 4-sample moving average, every 4th sample (first-order CIC)
     samples = capture.samples[:, :search]
-    low = sum(samples[:, k::decimation] for k in range(decimation)) / decimation  # strided: no slow axis mean
+    low = samples[:, 0::decimation].copy()  # strided, summed in place: no slow axis mean, no temporaries
+    for k in range(1, decimation):
+        low += samples[:, k::decimation]
+    low /= decimation
     replica = pss_replica(capture, decimation).astype(low.dtype)
     lags = low.shape[1] - len(replica) + 1
     if lags < 1:
