@@ -182,8 +182,13 @@ class FrontEnd:
         if turned and not np.any(np.all(np.isclose(rivals, candidates[by_motion]), axis=1)):
             # the scan took a pose turned from the motion's choice: that stays a rival for the map to decide
             # (a corridor folded back onto itself explains a corner's scan better than the corner does,
-            # whose new walls the map has not seen yet)
+            # whose new walls the map has not seen yet), and so does the prediction's own fit, where the
+            # candidates, ranked against the turned one, missed it (a corner's clutter)
+            fitted = correlative_match(grid, xy, phi, primary, cfg.distinct_m, np.radians(cfg.window_deg),
+                                       self.step_rad).pose
             rivals = np.vstack([rivals, candidates[by_motion]])
+            if np.min(np.linalg.norm(rivals[:, :2] - fitted[:2], axis=1)) > cfg.distinct_m:
+                rivals = np.vstack([rivals, fitted])
             status = ScanStatus.AMBIGUOUS
             turn = np.degrees(wrap_angle(pose[2] - candidates[by_motion, 2]))
             note = "; ".join(filter(None, [note, f"turned {turn:.0f}° from the motion's choice, which stays a rival"]))
