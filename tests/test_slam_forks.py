@@ -263,6 +263,18 @@ def test_a_weak_match_turned_from_the_prediction_keeps_it_as_a_rival_for_the_map
     assert ate_rmse(result.poses, case.scene.poses) <= 0.35
 
 
+def recorded_walk(name: str):
+    """The scans recorded in tests/data/``name`` and narrow-corridor's true poses of as many scans."""
+    from radioslam.scene import load_scene
+    from radioslam.sensing.pointcloud import Scan
+
+    recorded = np.load(Path(__file__).parent / "data" / name)
+    ends = np.cumsum(recorded["counts"])
+    fields = ("range_m", "angle_rad", "power_db", "beam", "orientation")
+    scans = [Scan(*(recorded[f][end - count:end] for f in fields)) for end, count in zip(ends, recorded["counts"])]
+    return scans, load_scene("narrow-corridor").poses[:len(scans)]
+
+
 def test_a_walk_around_a_block_turns_its_first_corner():
     """narrow-corridor (2.4 m wide around an 11.2 m × 4 m block), seed 1, the first 50 scans, recorded
     (sensed by session 15's receiver). At scan 37, just into the side corridor, 16 of the scan's 37
@@ -273,14 +285,8 @@ def test_a_walk_around_a_block_turns_its_first_corner():
     points where the terminal walked, the corner's branch none, and exploring it closes no loop: the
     contradiction alone decides, two scans later."""
     from radioslam.eval.trajectory_metrics import ate_rmse
-    from radioslam.scene import load_scene
-    from radioslam.sensing.pointcloud import Scan
 
-    recorded = np.load(Path(__file__).parent / "data" / "narrow-corridor-1-scans.npz")
-    ends = np.cumsum(recorded["counts"])
-    fields = ("range_m", "angle_rad", "power_db", "beam", "orientation")
-    scans = [Scan(*(recorded[f][end - count:end] for f in fields)) for end, count in zip(ends, recorded["counts"])]
-    truth = load_scene("narrow-corridor").poses[:len(scans)]
+    scans, truth = recorded_walk("narrow-corridor-1-scans.npz")
     result = RadioSlam().run(scans)
     assert result.status[37] is ScanStatus.AMBIGUOUS
     assert any(w.startswith("scan 37:") and "rival taken" in w and "saw through" in w for w in result.warnings)
@@ -300,14 +306,8 @@ def test_a_walk_around_a_block_closes_its_last_corner_onto_its_start():
     it folds onto and puts its points where the terminal walked (18 against the rival's 1), and the
     contradiction alone decides, eleven scans on."""
     from radioslam.eval.trajectory_metrics import ate_rmse
-    from radioslam.scene import load_scene
-    from radioslam.sensing.pointcloud import Scan
 
-    recorded = np.load(Path(__file__).parent / "data" / "narrow-corridor-6-scans.npz")
-    ends = np.cumsum(recorded["counts"])
-    fields = ("range_m", "angle_rad", "power_db", "beam", "orientation")
-    scans = [Scan(*(recorded[f][end - count:end] for f in fields)) for end, count in zip(ends, recorded["counts"])]
-    truth = load_scene("narrow-corridor").poses[:len(scans)]
+    scans, truth = recorded_walk("narrow-corridor-6-scans.npz")
     result = RadioSlam().run(scans)
     assert result.status[110] is ScanStatus.AMBIGUOUS
     assert any(w.startswith("scan 110:") and "rival taken" in w for w in result.warnings)
