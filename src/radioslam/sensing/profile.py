@@ -72,7 +72,7 @@ class RangeSpectrum:
 
     def at(self, lags: np.ndarray) -> np.ndarray:
         """F at fractional lags (B, K) (:class:`~radioslam.nr.nufft.LagSums`: 20 multiply-adds each)."""
-        return self._signal_sums(lags)[0] / self.scale[:, None]
+        return self.with_derivatives(lags, order=0)[0]
 
     def with_derivatives(self, lags: np.ndarray, rows: np.ndarray | None = None, order: int = 2) -> np.ndarray:
         """F and its lag derivatives up to ``order`` (≤ 2) at fractional lags (B, K): (order + 1, B, K);
@@ -98,7 +98,7 @@ class RangeSpectrum:
     def kernel(self, lags: np.ndarray) -> np.ndarray:
         """Σ_p model(p)·e^{j2πpt/N} at lags (B, K): the response at lag t of a path at lag 0,
         unnormalized (the Gram entries of two paths t apart)."""
-        return self._kernel_sums(lags)[0]
+        return self.kernel_with_derivatives(lags, order=0)[0]
 
     def path_spectrum(self, lags: np.ndarray, amplitude: np.ndarray) -> np.ndarray:
         """The spectrum (B, n_sc) that paths (B, K) of the given lags and amplitudes put in S."""
