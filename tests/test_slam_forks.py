@@ -12,7 +12,7 @@ from radioslam.slam.back_end import BackEnd
 from radioslam.slam.forks import Forks
 from radioslam.slam.front_end import Step
 from radioslam.slam.loop_closer import LoopClosure
-from radioslam.slam.se2 import between, compose, inverse, pose_covariance, wrap_angle
+from radioslam.slam.se2 import between, compose, inverse, pose_covariance, transform_points, wrap_angle
 
 COV = pose_covariance(0.02, 0.3)
 
@@ -33,6 +33,7 @@ class StubCloser:
 
     def __init__(self, place: np.ndarray, score: float, chosen: float = 0.0):
         self.place, self.score, self.chosen, self.asked = place, score, chosen, []
+        self.points = {}  # no scans: every branch is placed where it is (:meth:`Forks._placed`)
 
     def matched_in(self, matcher, k, pose, keys, estimates):
         self.asked.append((k, pose, tuple(keys)))
@@ -52,13 +53,19 @@ class StubCloser:
         return LikelihoodGrid.from_points(wall, 0.1, 0.05, 1.0, np.full(5, np.pi), np.radians(1.0), 0.5), None
 
 
+def chosen_branch(jump: np.ndarray | None) -> bool:
+    """Whether ``_on_free`` was asked about the chosen branch: at its estimates, or placed by a loop of
+    :class:`StubCloser`, which places it there too."""
+    return jump is None or np.allclose(jump, 0.0)
+
+
 def fork_at_scan_3(closer: StubCloser, contradicted: bool = True, on_free: int = 10):
     """Scan 3 is ambiguous (the chosen pose walked on, the rival turned by 180°); scan 5 is then
     observed, the chosen branch ``contradicted`` by the map before the fork (``on_free`` of its 400
     points on its free space, the rival's none) or not. Returns the decision and the estimates."""
     forks = Forks.from_config(SlamConfig())
     forks._on_free = lambda fork, k, estimates, loop_closer, jump=None: \
-        (on_free if contradicted and jump is None else 0, 400)
+        (on_free if contradicted and chosen_branch(jump) else 0, 400)
     estimates = {k: p for k, p in enumerate(walk(6))}  # the chosen branch: straight on
     rival = compose(estimates[2], [0.0, 0.0, np.pi])
     for k in range(6):
@@ -78,6 +85,142 @@ def test_a_rival_branch_that_closes_a_loop_the_chosen_one_does_not_is_taken():
     assert decided is not None and decided.fork == 3 and len(decided.switches) == 1
     np.testing.assert_allclose(compose(decided.switches[0][1], estimates[5]), truth_5, atol=1e-9)
     assert all(keys == (0, 1, 2) for _, _, keys in closer.asked)  # only the map before it
+
+
+def placing(forks: Forks, rival_place: np.ndarray | None = None, chosen_shift: np.ndarray | None = None):
+    """``forks._placed`` as the map from before a fork would answer: the rival branch's scan k carried to
+    ``rival_place``, the chosen branch's shifted by ``chosen_shift`` (in its own frame), else as they are."""
+    def placed(fork, k, estimates, scans, jump):
+        chosen = np.allclose(jump, 0.0)
+        if chosen and chosen_shift is not None:
+            return compose(compose(estimates[k], chosen_shift), inverse(estimates[k]))
+        if not chosen and rival_place is not None:
+            return compose(rival_place, inverse(estimates[k]))
+        return jump
+
+    forks._placed = placed
+
+
+def ambiguous_walk(forks: Forks, closer: StubCloser) -> dict[int, np.ndarray]:
+    """:func:`walk` (6 scans) remembered by ``forks``, scan 3 ambiguous with its rival turned back by 180°."""
+    estimates = {k: p for k, p in enumerate(walk(6))}
+    for k in range(6):
+        forks.remember(k, Step(estimates[k], COV, ScanStatus.AMBIGUOUS if k == 3 else ScanStatus.MATCHED, 0.6,
+                               compose(estimates[2], [0.0, 0.0, np.pi])[None] if k == 3 else np.zeros((0, 3))),
+                       {m: estimates[m] for m in range(k + 1)}, closer)
+    return estimates
+
+
+def test_the_rival_branch_is_counted_and_taken_where_the_map_places_it_not_where_its_fork_scan_put_it():
+    """narrow-corridor seed 2's fourth corner: the rival, the motion's choice among the candidates, sat
+    0.4 m along the corridor from the truth; carried by its own jump its branch put 51 points on the old
+    map's free space against the folded choice's 15, placed by that map none. Both the count and the
+    switch take the branch where the map places it."""
+    slid = compose(compose(walk(3)[2], [0.0, 0.0, np.pi]), [2.0, 0.0, 0.0])  # scan 5 by the rival's jump
+    place = compose(slid, [0.4, 0.0, 0.0])
+    counted = []
+    forks = Forks.from_config(SlamConfig())
+
+    def on_free(fork, k, estimates, scans, jump=None):
+        carried = None if jump is None else compose(jump, estimates[k])
+        counted.append(carried)
+        return (40 if chosen_branch(jump) else 0 if np.allclose(carried, place) else 80, 400)
+
+    forks._on_free = on_free
+    placing(forks, rival_place=place)
+    closer = StubCloser(slid, 0.6)
+    estimates = ambiguous_walk(forks, closer)
+    decided = forks.observe(5, ScanStatus.MATCHED, estimates, closer)
+    assert decided is not None and decided.fork == 3
+    assert any(c is not None and np.allclose(c, place) for c in counted)
+    np.testing.assert_allclose(compose(decided.switches[0][1], estimates[5]), place, atol=1e-9)
+    placing(forks)  # counted where its jump puts it (80 against 40), the rival would not be taken
+    forks.open, forks.rival_loops = [], {}
+    assert forks.observe(5, ScanStatus.MATCHED, ambiguous_walk(forks, closer), closer) is None
+
+
+def test_a_branch_is_placed_where_its_scans_together_fit_the_map_from_before_the_fork():
+    """:meth:`Forks._placed` on real walls: a corner mapped before the fork, and a branch whose three scans
+    of it are carried 0.3 m and 2° off; the match of the three together puts them back within a cell."""
+    from radioslam.slam.forks import Fork
+    from radioslam.slam.grid import LikelihoodGrid
+    from radioslam.slam.scan_points import ScanPoints
+
+    along = np.linspace(-3.0, 3.0, 61)
+    walls = np.vstack([np.column_stack([along, np.full(61, 1.2)]), np.column_stack([np.full(61, 3.0), along])])
+    normals = np.concatenate([np.full(61, -np.pi / 2), np.full(61, np.pi)])  # facing the terminal at the origin
+    grid = LikelihoodGrid.from_points(walls, 0.05, 0.05, 1.0, normals, np.radians(10.0), 0.5)
+    fork = Fork(1, np.zeros((1, 3)), grid, (0,), 4)
+    truth = {m: np.array([0.5 * m, 0.0, 0.1 * m]) for m in (1, 2, 3)}
+    scans = {}
+    for m, pose in truth.items():
+        local = transform_points(inverse(pose), walls[::3])
+        scans[m] = ScanPoints(local, normals[::3] - pose[2], np.zeros((0, 2)))
+    off = np.array([0.3, -0.2, np.radians(2.0)])
+    estimates = {m: compose(off, pose) for m, pose in truth.items()}  # the branch as its estimates put it
+    placed = Forks.from_config(SlamConfig())._placed(fork, 3, estimates, scans, np.zeros(3))
+    for m in truth:
+        error = compose(placed, estimates[m]) - truth[m]
+        assert np.all(np.abs(error[:2]) <= 0.05) and abs(wrap_angle(error[2])) <= np.radians(0.5)
+
+
+def test_a_new_fork_evicts_the_oldest_fork_the_map_does_not_contradict_yet():
+    """At ``fork_limit`` open forks a new one takes the place of the oldest, unless the map from before
+    that one already contradicts its chosen branch (narrow-corridor seed 8: the second corner's fold runs
+    into the first corner and opens four forks of its own, which evicted the fork that was to be
+    decided); then the oldest uncontradicted one goes, and the oldest goes when all are contradicted."""
+    def remembered(contradicted: set[int]) -> list[int]:
+        forks = Forks.from_config(SlamConfig())
+        forks._on_free = lambda fork, k, estimates, loop_closer, jump=None: \
+            (40 if fork.key in contradicted else 0, 400)
+        estimates = {k: p for k, p in enumerate(walk(12))}
+        closer = StubCloser(np.full(3, 99.0), 0.6)
+        for k in range(12):
+            ambiguous = k in (3, 5, 7, 9)
+            forks.remember(k, Step(estimates[k], COV, ScanStatus.AMBIGUOUS if ambiguous else ScanStatus.MATCHED, 0.6,
+                                   compose(estimates[k - 1], [0, 0, np.pi])[None] if ambiguous else np.zeros((0, 3))),
+                           {m: estimates[m] for m in range(k + 1)}, closer)
+        return [f.key for f in forks.open]
+
+    assert SlamConfig().loop_closure.fork_limit == 3
+    assert remembered(set()) == [5, 7, 9]
+    assert remembered({3}) == [3, 7, 9]
+    assert remembered({3, 5, 7}) == [5, 7, 9]
+
+
+def test_the_chosen_branch_is_judged_where_the_map_places_it_too():
+    """narrow-corridor seed 9: at its estimates the true (chosen) branch put 26 of 162 points on the old
+    map's free space, 0.25 m across the corridor from where that map places it (none there); its rival,
+    placed, none. Judging the rival where the map puts it and the choice where its estimates do took the
+    wrong branch; judged alike, nothing contradicts the choice, and no fork contests a suspicious scan."""
+    truth_5 = compose(compose(walk(3)[2], [0.0, 0.0, np.pi]), [2.0, 0.0, 0.0])
+    closer = StubCloser(truth_5, 0.9, 0.6)
+    forks = Forks.from_config(SlamConfig())
+    forks._on_free = lambda fork, k, estimates, scans, jump=None: (40 if chosen_branch(jump) else 0, 400)
+    placing(forks, chosen_shift=np.array([0.0, 0.25, 0.0]))
+    estimates = ambiguous_walk(forks, closer)
+    assert forks.observe(5, ScanStatus.MATCHED, estimates, closer) is None
+    assert not forks.contested(5, estimates, closer, Step(estimates[5], COV, ScanStatus.MATCHED, 0.6), None)
+    placing(forks)  # where its estimates put it, the choice is contradicted
+    assert forks.contested(5, estimates, closer, Step(estimates[5], COV, ScanStatus.MATCHED, 0.6), None)
+    assert forks.observe(5, ScanStatus.MATCHED, estimates, closer) is not None
+
+
+def test_placed_switches_carry_the_latest_poses_by_the_placed_jump_in_all():
+    """Two forks' switches, latest first, as :meth:`BackEnd.switch` applies them: with the latest jump
+    replaced, the poses after both forks are carried by the placed jump, the earlier fork's own."""
+    from radioslam.slam.forks import placed_switches
+
+    rng = np.random.default_rng(3)
+    pose, placed = rng.normal(size=3), rng.normal(size=3)
+    jump_2, jump_5 = rng.normal(size=3), rng.normal(size=3)
+    switches = placed_switches([(5, jump_5), (2, jump_2)], placed)
+    assert [key for key, _ in switches] == [5, 2] and np.allclose(switches[1][1], jump_2)
+    carried = pose
+    for _, jump in switches:  # the latest first, then the earlier one on top
+        carried = compose(jump, carried)
+    np.testing.assert_allclose(carried, compose(placed, pose), atol=1e-9)
+    np.testing.assert_allclose(placed_switches([(2, jump_2)], placed)[0][1], placed, atol=1e-12)
 
 
 def test_the_choice_stands_when_the_chosen_branch_closes_as_good_a_loop_or_nothing_contradicts_it():
@@ -111,9 +254,9 @@ def test_a_branch_is_contradicted_by_walls_where_the_map_before_the_fork_saw_thr
     fork = Fork(1, np.zeros((1, 3)), grid, (0,), 4)
     across = np.column_stack([np.full(20, 2.0), np.linspace(-0.5, 0.5, 20)])  # a wall across the line
     forks = Forks.from_config(SlamConfig())
-    closer = SimpleNamespace(points={1: SimpleNamespace(xy=across, normals=np.full(20, np.nan))})
-    assert forks._contradicted(*forks._on_free(fork, 1, {1: np.zeros(3)}, closer))
-    assert not forks._contradicted(*forks._on_free(fork, 1, {1: np.array([3.0, 0.0, 0.0])}, closer))  # on the wall
+    scans = {1: SimpleNamespace(xy=across, normals=np.full(20, np.nan))}
+    assert forks._contradicted(*forks._on_free(fork, 1, {1: np.zeros(3)}, scans))
+    assert not forks._contradicted(*forks._on_free(fork, 1, {1: np.array([3.0, 0.0, 0.0])}, scans))  # on the wall
 
 
 def test_the_chosen_branch_must_be_contradicted_significantly_more_than_the_rivals():
@@ -218,7 +361,8 @@ def test_a_rival_loop_closed_before_the_chosen_branch_is_contradicted_is_remembe
     closer = StubCloser(truth_4, 0.6)
     forks = Forks.from_config(SlamConfig())
     evidence = {4: 0, 5: 40}  # the chosen branch's points on the map's free space, by scan
-    forks._on_free = lambda fork, k, estimates, loop_closer, jump=None: (evidence[k] if jump is None else 0, 400)
+    forks._on_free = lambda fork, k, estimates, loop_closer, jump=None: \
+        (evidence[k] if chosen_branch(jump) else 0, 400)
     estimates = {k: p for k, p in enumerate(walk(6))}
     rival = compose(estimates[2], [0.0, 0.0, np.pi])
     for k in range(4):

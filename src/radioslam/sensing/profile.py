@@ -87,9 +87,10 @@ class RangeSpectrum:
 
     @cached_property
     def kernel_at_zero(self) -> np.ndarray:
-        """(3, B): the kernel and its first two lag derivatives at lag 0 (Σ_p model·(jω)^k)."""
-        jw = 2j * np.pi * self.p / self.fft_size
-        return np.stack([self.model.sum(axis=1), self.model @ jw, self.model @ jw**2])
+        """(3, B): the kernel and its first two lag derivatives at lag 0 (Σ_p model·(jω)^k), from real
+        products (the model is real, jω imaginary: a complex product would copy the model to complex)."""
+        w = 2.0 * np.pi * self.p / self.fft_size
+        return np.stack([self.scale, 1j * (self.model @ w), -(self.model @ w**2)]).astype(np.complex128)
 
     def kernel_run(self, start: np.ndarray, count: int) -> np.ndarray:
         """:meth:`kernel` at the lags start, start + 1, …, start + count − 1 (start (B,)): (B, count)."""

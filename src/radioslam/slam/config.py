@@ -177,6 +177,10 @@ class LoopClosureConfig(_Section):
     # and significantly more of them than the rival's branch put there (one-sided sign test, this p-value);
     # at its square the contradiction decides alone, without a rival loop (an exploring rival closes none)
     fork_significance: float = Field(0.01, gt=0, lt=1)
+    # each branch is counted where the map from before places it: its scans since the fork, together, matched
+    # within ± these of where its estimates (a rival's: its jump) put them
+    fork_place_m: float = Field(0.5, gt=0)
+    fork_place_deg: float = Field(5.0, gt=0)
 
 
 class PoseGraphConfig(_Section):

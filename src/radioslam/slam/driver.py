@@ -116,7 +116,7 @@ class RadioSlam:
             lost = lost + 1 if step.status is ScanStatus.PREDICTED else 0
             suspect = lost >= cfg.loop_closure.relocalize_after or contradiction.suspicious(step)
             if suspect and step.status is not ScanStatus.PREDICTED and forks.contested(k, back_end.estimates,
-                                                                                      loop_closer):
+                                                                                      loop_closer, step, points):
                 suspect = False  # an open fork the map contradicts the choice of decides first (step 8)
             found = loop_closer.relocalize(k, points, back_end.estimates, k - lost) if suspect else None
             if found is not None and (step.status is ScanStatus.PREDICTED or contradiction.better(found.score, step)):

@@ -57,10 +57,11 @@ from scipy.stats import binom
 
 from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.config import LoopClosureConfig
-from radioslam.slam.correlative import candidate_likelihoods
+from radioslam.slam.correlative import candidate_likelihoods, correlative_match
 from radioslam.slam.front_end import Step
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
+from radioslam.slam.scan_points import ScanPoints, fused_points
 from radioslam.slam.se2 import between, compose, inverse, wrap_angle
 from radioslam.slam.status import ScanStatus
 
@@ -87,6 +88,15 @@ class Fork:
                          for rival in self.rivals])
 
 
+def placed_switches(switches: list[tuple[int, np.ndarray]], placed: np.ndarray) -> list[tuple[int, np.ndarray]]:
+    """``switches`` (latest first) with the latest jump replaced so that all of them together carry the
+    chosen branch by the jump ``placed``."""
+    earlier = np.zeros(3)
+    for _, jump in reversed(switches[1:]):  # the earlier forks' jumps, applied after the latest one's
+        earlier = compose(earlier, jump)
+    return [(switches[0][0], compose(inverse(earlier), placed))] + switches[1:]
+
+
 @dataclass(frozen=True)
 class Decision:
     switches: list[tuple[int, np.ndarray]]  # (ambiguous scan, jump onto its rival), latest first
@@ -101,8 +111,9 @@ class Decision:
 class Forks:
     """Remembers forks and tests their rivals; ``observe`` once per scan, after its loops."""
 
-    def __init__(self, cfg: LoopClosureConfig, turn_rad: float, levels: int):
+    def __init__(self, cfg: LoopClosureConfig, turn_rad: float, levels: int, angle_step: float):
         self.cfg, self.turn_rad = cfg, turn_rad  # rivals turned at least this much from the choice fork
+        self.angle_step = angle_step  # of the match that places a branch
         self.levels = levels  # branch-and-bound levels of each fork's matcher
         self.open: list[Fork] = []
         self.chosen_scores: dict[int, float] = {}  # per fork: the chosen branch's best match score since it
@@ -110,7 +121,8 @@ class Forks:
 
     @classmethod
     def from_config(cls, cfg) -> "Forks":
-        return cls(cfg.loop_closure, np.radians(cfg.front_end.distinct_deg), cfg.grid.branch_levels)
+        return cls(cfg.loop_closure, np.radians(cfg.front_end.distinct_deg), cfg.grid.branch_levels,
+                   np.radians(cfg.front_end.angle_step_deg))
 
     def remember(self, k: int, step: Step, estimates: dict[int, np.ndarray], loop_closer: LoopCloser) -> None:
         """Scan k's turned rivals, if any (once pose k − 1 and k are in ``estimates``), with the map before
@@ -122,17 +134,23 @@ class Forks:
         keys = loop_closer.map_keys(k, before=k)
         if not len(turned) or not keys:
             return
-        self.open = self.open[len(self.open) + 1 - self.cfg.fork_limit:]  # the latest fork_limit − 1
+        while len(self.open) >= self.cfg.fork_limit:
+            # room for the new fork: the oldest one goes, unless the map from before it already contradicts its
+            # chosen branch (a wrong branch's trouble opens forks of its own: narrow-corridor's second corner,
+            # its fold running into the first corner four forks later); then the oldest uncontradicted one
+            contested = [self._contradicted(*self._chosen_on_free(f, k - 1, estimates, loop_closer.points))
+                         for f in self.open]
+            del self.open[contested.index(False) if False in contested else 0]
         self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned]),
                               loop_closer.whole_map(keys, estimates)[0], tuple(keys), self.levels))
 
     @staticmethod
-    def _on_free(fork: Fork, k: int, estimates: dict[int, np.ndarray], loop_closer: LoopCloser,
+    def _on_free(fork: Fork, k: int, estimates: dict[int, np.ndarray], scans: dict[int, ScanPoints],
                  jump: np.ndarray | None = None) -> tuple[int, int]:
         """How many of the points of scans fork … k (at their latest poses, carried by ``jump`` if given:
         a rival's branch) lie on space the map from before the fork saw through, and of how many."""
-        keys = [m for m in range(fork.key, k + 1) if m in loop_closer.points]
-        on_free = [candidate_likelihoods(fork.grid, loop_closer.points[m].xy, loop_closer.points[m].normals,
+        keys = [m for m in range(fork.key, k + 1) if m in scans]
+        on_free = [candidate_likelihoods(fork.grid, scans[m].xy, scans[m].normals,
                                          estimates[m] if jump is None else compose(jump, estimates[m]),
                                          np.zeros(1), np.zeros(1, int)).ravel() < 0 for m in keys]
         return (int(np.count_nonzero(np.concatenate(on_free))), sum(map(len, on_free))) if on_free else (0, 0)
@@ -155,11 +173,43 @@ class Forks:
         level = self.cfg.fork_significance if significance is None else significance
         return chosen > 0 and float(binom.sf(chosen - 1, chosen + rival, 0.5)) <= level
 
-    def contested(self, k: int, estimates: dict[int, np.ndarray], loop_closer: LoopCloser) -> bool:
-        """Whether an open fork's chosen branch already put ``fork_contradicted`` of its points since the
-        fork on space the map from before saw through (scans up to k − 1): a scan k that contradicts
-        the map too is then that fork's to decide, not a relocalization's."""
-        return any(self._contradicted(*self._on_free(f, k - 1, estimates, loop_closer)) for f in self.open
+    def _placed(self, fork: Fork, k: int, estimates: dict[int, np.ndarray], scans: dict[int, ScanPoints],
+                jump: np.ndarray) -> np.ndarray:
+        """The jump that carries a branch (the chosen one carried by ``jump``) to where the map from before
+        ``fork`` places it: the branch's scans fork … k together, as one rigid scan, matched against that
+        map within ± ``fork_place_m``, ``fork_place_deg`` (Olson 2009's correlative search). A branch is a
+        rigid hypothesis whose place is not known to the centimetre: a rival is where its fork scan's
+        candidate put it (narrow-corridor seed 2: 0.4 m along the corridor, where its branch put 51 points
+        on that map's free space, placed none), the chosen branch where its estimates drifted (seed 9:
+        0.25 m across the corridor, 26 of 162 points there, placed none)."""
+        keys = [m for m in range(fork.key, k + 1) if m in scans]
+        if not keys:
+            return jump
+        carried = {m: compose(jump, estimates[m]) for m in keys}
+        xy, normals = fused_points(keys, carried, scans, carried[k])
+        match = correlative_match(fork.grid, xy, normals, carried[k], self.cfg.fork_place_m,
+                                  np.radians(self.cfg.fork_place_deg), self.angle_step)
+        return compose(match.pose, inverse(estimates[k]))
+
+    def _chosen_on_free(self, fork: Fork, k: int, estimates: dict[int, np.ndarray],
+                        scans: dict[int, ScanPoints]) -> tuple[int, int]:
+        """:meth:`_on_free` of the chosen branch since ``fork``, where the map from before places it
+        (:meth:`_placed`), as each rival branch is counted where it places that one; placed only when its
+        estimates are contradicted (placing moves a branch onto the map's walls, off its free space)."""
+        counted = self._on_free(fork, k, estimates, scans)
+        if not self._contradicted(*counted):
+            return counted
+        return self._on_free(fork, k, estimates, scans, self._placed(fork, k, estimates, scans, np.zeros(3)))
+
+    def contested(self, k: int, estimates: dict[int, np.ndarray], loop_closer: LoopCloser, step: Step,
+                  points: ScanPoints) -> bool:
+        """Whether an open fork's chosen branch, scan k at its ``step`` with its ``points`` included, put
+        ``fork_contradicted`` of its points since the fork on space the map from before saw through: a scan
+        k that contradicts its local map is then that fork's to decide, not a relocalization's (a fold
+        running into the map's free space: narrow-corridor seed 2's second corner, 2 of 298 points up to
+        scan 65, 13 of 333 with scan 66, which was relocalized to the block's 180° twin)."""
+        estimates, scans = {**estimates, k: step.pose}, {**loop_closer.points, k: points}
+        return any(self._contradicted(*self._chosen_on_free(f, k, estimates, scans)) for f in self.open
                    if f.key < k)
 
     def hypotheses(self, k: int, estimates: dict[int, np.ndarray]):
@@ -193,10 +243,10 @@ class Forks:
         unlooped = []  # (rival's points on free space, fork, switches) of contradicted forks without a rival loop
         for name, fork, switches, jump in self.hypotheses(k, estimates):
             if fork.key not in chosen_on_free:
-                chosen_on_free[fork.key] = self._on_free(fork, k, estimates, loop_closer)
                 chosen = loop_closer.matched_in(fork.matcher, k, estimates[k], fork.keys, estimates)
                 self.chosen_scores[fork.key] = max(self.chosen_scores.get(fork.key, 0.0),
                                                   0.0 if chosen is None else chosen.score)
+                chosen_on_free[fork.key] = self._chosen_on_free(fork, k, estimates, loop_closer.points)
             found = loop_closer.matched_in(fork.matcher, k, compose(jump, estimates[k]), fork.keys, estimates)
             if found is not None and found.weight >= self.cfg.fork_weight and \
                     (name not in self.rival_loops or found.score > self.rival_loops[name].score):
@@ -204,7 +254,9 @@ class Forks:
             on_free, points = chosen_on_free[fork.key]
             if not self._contradicted(on_free, points):
                 continue
-            rival_on_free = self._on_free(fork, k, estimates, loop_closer, jump)[0]
+            placed = self._placed(fork, k, estimates, loop_closer.points, jump)
+            rival_on_free = self._on_free(fork, k, estimates, loop_closer.points, placed)[0]
+            switches = placed_switches(switches, placed)
             best = self.rival_loops.get(name)
             if best is None or best.score <= (1.0 + self.cfg.fork_gain) * self.chosen_scores[fork.key]:
                 # no rival loop: an exploring rival closes none (a corridor's corner taken for the corridor
