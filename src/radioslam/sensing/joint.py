@@ -22,6 +22,7 @@ i < j are evaluated. One step costs 2M + 3·M(M−1)/2 evaluations of n_sc terms
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -37,6 +38,14 @@ def ridge(matrix: np.ndarray) -> np.ndarray:
     return matrix + load * np.eye(matrix.shape[1])[None]
 
 
+@lru_cache(maxsize=16)
+def pairs(m: int) -> tuple[np.ndarray, np.ndarray]:
+    """The index pairs i < j of m paths (``np.triu_indices(m, 1)``, built once per m, read-only)."""
+    upper, lower = np.triu_indices(m, 1)
+    upper.flags.writeable = lower.flags.writeable = False
+    return upper, lower
+
+
 @dataclass(frozen=True)
 class PairKernels:
     """K, K′, K″ (B, M, M) at every lag difference t_i − t_j of a beam's paths."""
@@ -49,7 +58,7 @@ class PairKernels:
     def at(cls, spec: RangeSpectrum, lag: np.ndarray, rows: np.ndarray | None = None) -> "PairKernels":
         """At the lags (B, M) of every beam of ``spec``, or (R, M) of its ``rows`` (R,)."""
         b, m = lag.shape
-        upper, lower = np.triu_indices(m, 1)
+        upper, lower = pairs(m)
         values = spec.kernel_with_derivatives(lag[:, upper] - lag[:, lower], rows)  # (3, B, pairs)
         kernels = np.empty((3, b, m, m), dtype=np.complex128)
         at_zero = spec.kernel_at_zero if rows is None else spec.kernel_at_zero[:, rows]

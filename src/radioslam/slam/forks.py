@@ -39,9 +39,14 @@ robot mapping", IJRR 2013: keep the alternatives, let the data pick one):
    first corner: the folded branch matches the old map as well as the corner, whose new walls it
    has not seen, and puts 10 of its next scan's 71 points where the terminal walked).
 
+   Each branch's points are counted where that map places the branch: its scans since the fork
+   together, as one rigid scan, matched against it (:meth:`Forks._placed`): a rival from where
+   its fork scan's candidate put it, which may be decimetres off, the chosen branch from where
+   its estimates drifted (only once they are contradicted there).
+
    Then the step into the fork scan is replaced by the rival's, which carries every later pose
-   by the jump (:meth:`radioslam.slam.back_end.BackEnd.switch`), and the rival loop, if any,
-   joins the graph.
+   by the placed jump (:meth:`radioslam.slam.back_end.BackEnd.switch`), and the rival loop, if
+   any, joins the graph.
 
 Both branches are judged by the map from before the fork, never by their own scans: a wrong
 branch builds a local map that agrees with itself.
