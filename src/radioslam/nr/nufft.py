@@ -90,9 +90,13 @@ class LagSums:
         q0 = p0 - self.centre
         weighted = values * _deconvolution(q0, n, self.size, self.width, self.beta)
         bins = place_in_bins(weighted, q0, self.size)
-        self.grid = sfft.ifft(bins, axis=1, norm="forward", workers=-1, overwrite_x=True)  # G (B, n_f)
+        grid = sfft.ifft(bins, axis=1, norm="forward", workers=-1, overwrite_x=True)  # G (B, n_f)
+        # G with W points of its other end either side (grid point n at column n + W): a tap's column
+        # needs no wrapping, only its base
+        self.padded = grid[:, np.arange(-self.width, self.size + self.width) % self.size]
         self.table = kernel_table(self.width, self.beta, POLYNOMIAL_DEGREE)
         self.taps = np.arange(1 - self.width // 2, 1 + self.width // 2)
+        self.tap_columns = self.taps + self.width  # of the taps of grid point 0 in ``padded``
 
     def __call__(self, lags: np.ndarray, rows: np.ndarray | None = None, order: int = 0) -> np.ndarray:
         """F and its lag derivatives up to ``order`` (≤ 2) at lags (B, K), or of ``rows`` (R,) at lags
@@ -100,8 +104,8 @@ class LagSums:
         lags = np.asarray(lags, dtype=np.float64)
         s = lags * self.upsample
         base = np.floor(s)
-        taps = (base.astype(np.int64)[..., None] + self.taps) % self.size  # (R, K, W)
-        h = np.einsum("rkw,rkdw->drk", self._at_taps(taps, rows), self._weights(s - base, order))
+        columns = (base.astype(np.int64) % self.size)[..., None] + self.tap_columns  # (R, K, W)
+        h = np.einsum("rkw,rkdw->drk", self._at_columns(columns, rows), self._weights(s - base, order))
         return self._from_centre(h, lags, order)
 
     def run(self, start: np.ndarray, count: int, rows: np.ndarray | None = None) -> np.ndarray:
@@ -112,8 +116,8 @@ class LagSums:
         s = start * self.upsample
         base = np.floor(s)
         span = (count - 1) * self.upsample + self.width
-        stretch = (base.astype(np.int64)[:, None] + (self.taps[0] + np.arange(span))) % self.size
-        g = sliding_window_view(self._at_taps(stretch, rows), self.width, axis=1)[:, ::self.upsample]  # (R, C, W)
+        stretch = (base.astype(np.int64)[:, None] + (self.taps[0] + np.arange(span))) % self.size + self.width
+        g = sliding_window_view(self._at_columns(stretch, rows), self.width, axis=1)[:, ::self.upsample]  # (R, C, W)
         h = (g @ self._weights(s - base, 0)[:, 0, :, None])[..., 0]
         return self._from_centre(h[None], start[:, None] + np.arange(count), 0)[0]
 
@@ -125,10 +129,10 @@ class LagSums:
         return (basis @ self.table[:, :order + 1].reshape(len(self.table), -1)).reshape(
             *fraction.shape, order + 1, self.width)
 
-    def _at_taps(self, taps: np.ndarray, rows: np.ndarray | None) -> np.ndarray:
-        """G at the grid points ``taps`` (R, ...) of each row."""
-        index = np.arange(len(self.grid)) if rows is None else np.asarray(rows)
-        return self.grid[index.reshape(-1, *(1,) * (taps.ndim - 1)), taps]
+    def _at_columns(self, columns: np.ndarray, rows: np.ndarray | None) -> np.ndarray:
+        """G at the ``columns`` (R, ...) of ``padded`` of each row."""
+        index = np.arange(len(self.padded)) if rows is None else np.asarray(rows)
+        return self.padded[index.reshape(-1, *(1,) * (columns.ndim - 1)), columns]
 
     def _from_centre(self, h: np.ndarray, lags: np.ndarray, order: int) -> np.ndarray:
         """F and its derivatives (order + 1, R, K) from H, the sums about the band's centre (per unit of
