@@ -419,6 +419,22 @@ def recorded_walk(name: str):
     return scans, load_scene("narrow-corridor").poses[:len(scans)]
 
 
+def corner_taken(name: str, corner: int) -> list[str]:
+    """SLAM on the recorded walk ``name``: its scan ``corner`` is ambiguous and its rival is taken, the
+    trajectory within 0.2 m (ATE) and 3° of the truth. Returns the warnings saying so."""
+    from radioslam.eval.trajectory_metrics import ate_rmse
+
+    scans, truth = recorded_walk(name)
+    result = RadioSlam().run(scans)
+    assert result.status[corner] is ScanStatus.AMBIGUOUS
+    taken = [w for w in result.warnings if w.startswith(f"scan {corner}:") and "rival taken" in w]
+    assert taken
+    assert ate_rmse(result.poses, truth) <= 0.2
+    turn = wrap_angle(wrap_angle(result.poses[:, 2] - result.poses[0, 2]) - wrap_angle(truth[:, 2] - truth[0, 2]))
+    assert np.degrees(np.abs(turn)).max() < 3.0
+    return taken
+
+
 def test_a_walk_around_a_block_turns_its_first_corner():
     """narrow-corridor (2.4 m wide around an 11.2 m × 4 m block), seed 1, the first 50 scans, recorded
     (sensed by session 15's receiver). At scan 37, just into the side corridor, 16 of the scan's 37
@@ -428,15 +444,7 @@ def test_a_walk_around_a_block_turns_its_first_corner():
     walk, silent). The motion's choice now stays a rival; the folded branch puts 10 of its next scan's 71
     points where the terminal walked, the corner's branch none, and exploring it closes no loop: the
     contradiction alone decides, two scans later."""
-    from radioslam.eval.trajectory_metrics import ate_rmse
-
-    scans, truth = recorded_walk("narrow-corridor-1-scans.npz")
-    result = RadioSlam().run(scans)
-    assert result.status[37] is ScanStatus.AMBIGUOUS
-    assert any(w.startswith("scan 37:") and "rival taken" in w and "saw through" in w for w in result.warnings)
-    assert ate_rmse(result.poses, truth) <= 0.2
-    turn = wrap_angle(wrap_angle(result.poses[:, 2] - result.poses[0, 2]) - wrap_angle(truth[:, 2] - truth[0, 2]))
-    assert np.degrees(np.abs(turn)).max() < 3.0
+    assert any("saw through" in w for w in corner_taken("narrow-corridor-1-scans.npz", 37))
 
 
 def test_a_walk_around_a_block_closes_its_last_corner_onto_its_start():
@@ -449,15 +457,7 @@ def test_a_walk_around_a_block_closes_its_last_corner_onto_its_start():
     now stays a rival too, within 0.1 m of the truth; the folded branch reaches the far end of the corridor
     it folds onto and puts its points where the terminal walked (18 against the rival's 1), and the
     contradiction alone decides, eleven scans on."""
-    from radioslam.eval.trajectory_metrics import ate_rmse
-
-    scans, truth = recorded_walk("narrow-corridor-6-scans.npz")
-    result = RadioSlam().run(scans)
-    assert result.status[110] is ScanStatus.AMBIGUOUS
-    assert any(w.startswith("scan 110:") and "rival taken" in w for w in result.warnings)
-    assert ate_rmse(result.poses, truth) <= 0.2
-    turn = wrap_angle(wrap_angle(result.poses[:, 2] - result.poses[0, 2]) - wrap_angle(truth[:, 2] - truth[0, 2]))
-    assert np.degrees(np.abs(turn)).max() < 3.0
+    corner_taken("narrow-corridor-6-scans.npz", 110)
 
 
 def test_a_walk_around_a_block_turns_its_second_corner():
@@ -468,12 +468,4 @@ def test_a_walk_around_a_block_turns_its_second_corner():
     and the forks the fold opened when it ran into the first corner (scans 67–70) evicted its fork
     (4.08 m over these scans, silent). Each branch counted where the map from before places it, and a
     contradicted fork kept, the fork is decided ten scans on."""
-    from radioslam.eval.trajectory_metrics import ate_rmse
-
-    scans, truth = recorded_walk("narrow-corridor-8-scans.npz")
-    result = RadioSlam().run(scans)
-    assert result.status[57] is ScanStatus.AMBIGUOUS
-    assert any(w.startswith("scan 57:") and "rival taken" in w for w in result.warnings)
-    assert ate_rmse(result.poses, truth) <= 0.2
-    turn = wrap_angle(wrap_angle(result.poses[:, 2] - result.poses[0, 2]) - wrap_angle(truth[:, 2] - truth[0, 2]))
-    assert np.degrees(np.abs(turn)).max() < 3.0
+    corner_taken("narrow-corridor-8-scans.npz", 57)
