@@ -29,8 +29,10 @@ def row_median(values: np.ndarray) -> np.ndarray:
 
 
 def noise_floor(power: np.ndarray) -> np.ndarray:
-    """Mean noise power per row (B,), from the median of exponentially distributed cells."""
-    return row_median(power) / np.log(2.0)
+    """Mean noise power per row (B,), from the median of exponentially distributed cells. The median is
+    selected in single precision (a third faster; a relative 6e-8, against the estimate's own spread of
+    1/√N ≈ 3 % for N = 1024 cells)."""
+    return row_median(power.astype(np.float32)).astype(power.dtype) / np.log(2.0)
 
 
 def noise_threshold(power: np.ndarray, pfa: float) -> np.ndarray:
