@@ -87,6 +87,10 @@ class Fork:
         """Branch and bound over the map from before the fork (built once, at its first use)."""
         return BranchAndBound(self.grid, self.levels)
 
+    def scans_since(self, k: int, scans: dict[int, ScanPoints]) -> list[int]:
+        """The scans of ``scans`` from the fork's to k (a skipped scan has none)."""
+        return [m for m in range(self.key, k + 1) if m in scans]
+
     def jumps(self, estimates: dict[int, np.ndarray]) -> np.ndarray:
         """(R, 3) world transforms carrying the chosen branch (latest estimates) onto each rival's."""
         return np.array([compose(compose(estimates[self.key - 1], rival), inverse(estimates[self.key]))
@@ -154,7 +158,7 @@ class Forks:
                  jump: np.ndarray | None = None) -> tuple[int, int]:
         """How many of the points of scans fork … k (at their latest poses, carried by ``jump`` if given:
         a rival's branch) lie on space the map from before the fork saw through, and of how many."""
-        keys = [m for m in range(fork.key, k + 1) if m in scans]
+        keys = fork.scans_since(k, scans)
         on_free = [candidate_likelihoods(fork.grid, scans[m].xy, scans[m].normals,
                                          estimates[m] if jump is None else compose(jump, estimates[m]),
                                          np.zeros(1), np.zeros(1, int)).ravel() < 0 for m in keys]
@@ -187,7 +191,7 @@ class Forks:
         candidate put it (narrow-corridor seed 2: 0.4 m along the corridor, where its branch put 51 points
         on that map's free space, placed none), the chosen branch where its estimates drifted (seed 9:
         0.25 m across the corridor, 26 of 162 points there, placed none)."""
-        keys = [m for m in range(fork.key, k + 1) if m in scans]
+        keys = fork.scans_since(k, scans)
         if not keys:
             return jump
         carried = {m: compose(jump, estimates[m]) for m in keys}
