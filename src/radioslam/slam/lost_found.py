@@ -84,8 +84,9 @@ def hypothesis_scores(grid: LikelihoodGrid, place: np.ndarray, other_grid: Likel
 def evidence(found_score: float, score: float, bound: float) -> float:
     """One scan's evidence for a trial: log(trial's score / front end's score) within ±``bound``
     (a score at or below zero, a place the map contradicts, counts as the bound)."""
-    tiny = 1e-12
-    return float(np.clip(np.log(max(found_score, tiny)) - np.log(max(score, tiny)), -bound, bound))
+    if found_score <= 0 or score <= 0:  # the bound against the one at or below zero (both: no evidence)
+        return float(bound * (int(found_score > 0) - int(score > 0)))
+    return float(np.clip(np.log(found_score) - np.log(score), -bound, bound))
 
 
 class LostAndFound:
