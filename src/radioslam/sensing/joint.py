@@ -48,23 +48,26 @@ def pairs(m: int) -> tuple[np.ndarray, np.ndarray]:
 
 @dataclass(frozen=True)
 class PairKernels:
-    """K, K′, K″ (B, M, M) at every lag difference t_i − t_j of a beam's paths."""
+    """K, K′, K″ (B, M, M) at every lag difference t_i − t_j of a beam's paths (K′, K″: None when not
+    asked for)."""
 
     k0: np.ndarray
-    k1: np.ndarray
-    k2: np.ndarray
+    k1: np.ndarray | None = None
+    k2: np.ndarray | None = None
 
     @classmethod
-    def at(cls, spec: RangeSpectrum, lag: np.ndarray, rows: np.ndarray | None = None) -> "PairKernels":
-        """At the lags (B, M) of every beam of ``spec``, or (R, M) of its ``rows`` (R,)."""
+    def at(cls, spec: RangeSpectrum, lag: np.ndarray, rows: np.ndarray | None = None,
+           order: int = 2) -> "PairKernels":
+        """Up to the ``order``-th derivative, at the lags (B, M) of every beam of ``spec``, or (R, M) of its
+        ``rows`` (R,)."""
         b, m = lag.shape
         upper, lower = pairs(m)
-        values = spec.kernel_with_derivatives(lag[:, upper] - lag[:, lower], rows)  # (3, B, pairs)
-        kernels = np.empty((3, b, m, m), dtype=np.complex128)
-        at_zero = spec.kernel_at_zero if rows is None else spec.kernel_at_zero[:, rows]
+        values = spec.kernel_with_derivatives(lag[:, upper] - lag[:, lower], rows, order)  # (order + 1, B, pairs)
+        kernels = np.empty((order + 1, b, m, m), dtype=np.complex128)
+        at_zero = (spec.kernel_at_zero if rows is None else spec.kernel_at_zero[:, rows])[:order + 1]
         kernels[:, :, np.arange(m), np.arange(m)] = at_zero[:, :, None]
         kernels[:, :, upper, lower] = values
-        kernels[:, :, lower, upper] = values.conj() * np.array([1.0, -1.0, 1.0])[:, None, None]
+        kernels[:, :, lower, upper] = values.conj() * np.array([1.0, -1.0, 1.0])[:order + 1, None, None]
         return cls(*kernels)
 
 
@@ -84,7 +87,7 @@ def joint_amplitudes(spec: RangeSpectrum, rows: np.ndarray, lag: np.ndarray, pre
     """The least-squares amplitudes (R, M) of paths at lags (R, M) on ``spec``'s ``rows`` (absent: 0)."""
     t = np.nan_to_num(lag)
     inner = spec.with_derivatives(t, rows, order=0)[0] * spec.scale[rows][:, None]  # ⟨e_i, S⟩
-    return solve_amplitudes(PairKernels.at(spec, t, rows).k0, inner, present)
+    return solve_amplitudes(PairKernels.at(spec, t, rows, order=0).k0, inner, present)
 
 
 def gauss_newton_step(spec: RangeSpectrum, rows: np.ndarray, lag: np.ndarray, present: np.ndarray,

@@ -1,6 +1,6 @@
 """Coarse synchronization on the PSS (T1), paper §III-A and §III-C.
 
-The received window is decimated by 4 (a 4-sample moving average, i.e. a
+The received window is decimated by 4 (a 4-sample moving sum, i.e. a
 first-order CIC: −0.8 dB at the PSS band edge ±7.6 MHz, so the 127-subcarrier PSS
 survives while the rate drops to f_s/4) and cross-correlated with the local PSS
 at that rate. The correlation peak marks where the echo's PSS useful part starts;
@@ -56,12 +56,12 @@ def coarse_sync(capture: Capture, decimation: int = 4, pfa: float = 1e-6) -> Syn
     window = capture.samples.shape[1]
     search = int(min(window, (window - burst.min()) + useful0.max() + num.fft_size))
     search -= search % decimation
-    # decimate: 4-sample moving average, every 4th sample (first-order CIC)
+    # decimate: 4-sample moving sum, every 4th sample (first-order CIC; not divided by 4, as neither the
+    # peak's lag nor its ratio to the floor depends on the scale)
     samples = capture.samples[:, :search]
     low = samples[:, 0::decimation].copy()  # strided, summed in place: no slow axis mean, no temporaries
     for k in range(1, decimation):
         low += samples[:, k::decimation]
-    low /= decimation
     replica = pss_replica(capture, decimation).astype(low.dtype)
     lags = low.shape[1] - len(replica) + 1
     if lags < 1:
