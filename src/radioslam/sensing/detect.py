@@ -241,7 +241,9 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
         # only the beams still searching: a beam whose last search found nothing is done, its paths refined
         active = np.flatnonzero(searching)
         sub = spec if len(active) == len(rows) else spec.rows(active)
-        resid = sub.minus(sub.path_spectrum(np.nan_to_num(lag[active]), np.where(present[active], amp[active], 0.0)))
+        known = slice(0, slot)  # the leakage and the paths found so far (the later columns are empty)
+        resid = sub.minus(sub.path_spectrum(np.nan_to_num(lag[active, known]),
+                                            np.where(present[active, known], amp[active, known], 0.0)))
         profile = resid.profile()
         power = np.abs(profile) ** 2
         # CFAR only where it can matter: the local maxima in the gate above the noise threshold
@@ -257,8 +259,7 @@ def detect_multi(spec: RangeSpectrum, gate: LagGate, cfg: SensingConfig, refiner
         if not found.any():
             break
         now = active[found]
-        found_before = slice(0, slot)  # cancelled in the lag domain while the new path is refined
-        cancelled = CancelledSpectrum(spec, now, lag[now, found_before], amp[now, found_before])
+        cancelled = CancelledSpectrum(spec, now, lag[now, known], amp[now, known])  # while the new path is refined
         refined = refiner.refine(cancelled, signed_lag(peaks[found], n), neighbour_values(profile[found], peaks[found]))
         present[now, slot] = True
         lag[now, slot], amp[now, slot] = refined.lag[:, 0], refined.amplitude[:, 0]
