@@ -15,6 +15,7 @@ thousands of samples (32 µs ≈ 3932 samples) is found without being told.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import scipy.fft as sfft
@@ -35,13 +36,27 @@ class SyncResult:
 
 def pss_replica(capture: Capture, decimation: int) -> np.ndarray:
     """The PSS symbol's useful part at f_s/decimation, unit energy, shape (N/decimation,)."""
-    radio, num = capture.radio, capture.numerology
-    n = num.fft_size // decimation
+    return _replica(capture.radio.pss, capture.radio.n_id2, capture.numerology.fft_size // decimation)
+
+
+@lru_cache(maxsize=8)
+def _replica(pss, n_id2: int, n: int) -> np.ndarray:
     p = np.arange(-63, 64)
     grid = np.zeros(n, dtype=np.complex128)
-    grid[p % n] = pss_grid(radio.pss, radio.n_id2, p)
+    grid[p % n] = pss_grid(pss, n_id2, p)
     replica = sfft.ifft(grid)
-    return replica / np.linalg.norm(replica)
+    replica /= np.linalg.norm(replica)
+    replica.flags.writeable = False
+    return replica
+
+
+@lru_cache(maxsize=8)
+def _replica_spectrum(pss, n_id2: int, n: int, size: int, dtype: np.dtype) -> np.ndarray:
+    """conj(FFT) of the replica, zero-padded to ``size``, in ``dtype``: what each beam's spectrum is
+    multiplied by (built once per radio and window length)."""
+    spectrum = np.conj(sfft.fft(_replica(pss, n_id2, n).astype(dtype), size))
+    spectrum.flags.writeable = False
+    return spectrum
 
 
 def coarse_sync(capture: Capture, decimation: int = 4, pfa: float = 1e-6) -> SyncResult:
@@ -62,12 +77,13 @@ def coarse_sync(capture: Capture, decimation: int = 4, pfa: float = 1e-6) -> Syn
     low = samples[:, 0::decimation].copy()  # strided, summed in place: no slow axis mean, no temporaries
     for k in range(1, decimation):
         low += samples[:, k::decimation]
-    replica = pss_replica(capture, decimation).astype(low.dtype)
-    lags = low.shape[1] - len(replica) + 1
+    n = num.fft_size // decimation  # the replica's length
+    lags = low.shape[1] - n + 1
     if lags < 1:
         raise ValueError("window shorter than one PSS symbol")
-    size = sfft.next_fast_len(low.shape[1] + len(replica))
-    spectrum = sfft.fft(low, size, axis=1, workers=-1) * np.conj(sfft.fft(replica, size))[None]
+    size = sfft.next_fast_len(low.shape[1] + n)
+    spectrum = sfft.fft(low, size, axis=1, workers=-1)
+    spectrum *= _replica_spectrum(capture.radio.pss, capture.radio.n_id2, n, size, low.dtype)[None]
     corr = sfft.ifft(spectrum, axis=1, overwrite_x=True, workers=-1)[:, :lags]
     power = corr.real**2 + corr.imag**2
     peak = np.argmax(power, axis=1)
