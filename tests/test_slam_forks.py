@@ -59,10 +59,11 @@ def chosen_branch(jump: np.ndarray | None) -> bool:
     return jump is None or np.allclose(jump, 0.0)
 
 
-def fork_at_scan_3(closer: StubCloser, contradicted: bool = True, on_free: int = 10):
-    """Scan 3 is ambiguous (the chosen pose walked on, the rival turned by 180°); scan 5 is then
-    observed, the chosen branch ``contradicted`` by the map before the fork (``on_free`` of its 400
-    points on its free space, the rival's none) or not. Returns the decision and the estimates."""
+def fork_at_scan_3(closer: StubCloser, contradicted: bool = True, on_free: int = 10, last: bool = False):
+    """Scan 3 is ambiguous (the chosen pose walked on, the rival turned by 180°); scan 5 (the walk's
+    ``last`` or not) is then observed, the chosen branch ``contradicted`` by the map before the fork
+    (``on_free`` of its 400 points on its free space, the rival's none) or not. Returns the decision and
+    the estimates."""
     forks = Forks.from_config(SlamConfig())
     forks._on_free = lambda fork, k, estimates, loop_closer, jump=None: \
         (on_free if contradicted and chosen_branch(jump) else 0, 400)
@@ -72,7 +73,7 @@ def fork_at_scan_3(closer: StubCloser, contradicted: bool = True, on_free: int =
         rivals = rival[None] if k == 3 else np.zeros((0, 3))
         forks.remember(k, Step(estimates[k], COV, ScanStatus.AMBIGUOUS if k == 3 else ScanStatus.MATCHED,
                                0.6, rivals), {m: estimates[m] for m in range(k + 1)}, closer)
-    decided = forks.observe(5, ScanStatus.MATCHED, estimates, closer)
+    decided = forks.observe(5, ScanStatus.MATCHED, estimates, closer, last=last)
     return decided, estimates
 
 
@@ -237,6 +238,18 @@ def test_the_choice_stands_when_the_chosen_branch_closes_as_good_a_loop_or_nothi
     assert fork_at_scan_3(StubCloser(truth_5, 0.6, 0.55), on_free=40)[0] is not None
     assert fork_at_scan_3(StubCloser(np.full(3, 99.0), 0.6), on_free=40)[0] is not None  # no rival loop at all
     assert fork_at_scan_3(StubCloser(np.full(3, 99.0), 0.6), on_free=10)[0] is None
+
+
+def test_at_the_walks_last_scan_the_contradiction_alone_decides_at_the_plain_significance():
+    """No later scan can add evidence: without a rival loop, 7 of 400 points on the map's free space
+    against none (P = 1/128: beyond the significance squared, within it) decide at the last scan, and
+    not at an earlier one; 5 against none (P = 1/32) do not, nor does a choice nothing contradicts."""
+    nowhere = StubCloser(np.full(3, 99.0), 0.6)  # the rival closes no loop
+    assert fork_at_scan_3(nowhere, on_free=7)[0] is None
+    decided, _ = fork_at_scan_3(nowhere, on_free=7, last=True)
+    assert decided is not None and decided.fork == 3 and decided.loop is None
+    assert fork_at_scan_3(nowhere, on_free=5, last=True)[0] is None
+    assert fork_at_scan_3(nowhere, contradicted=False, last=True)[0] is None
 
 
 def test_a_branch_is_contradicted_by_walls_where_the_map_before_the_fork_saw_through():

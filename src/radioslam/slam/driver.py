@@ -145,7 +145,7 @@ class RadioSlam:
                                                                  back_end.drift)]
             # 8. an ambiguous scan's rival branch that matches the map from before it far better than the chosen
             #    branch, which contradicts that map, is taken: every pose since carried by its jump
-            decided = forks.observe(k, step.status, back_end.estimates, loop_closer)
+            decided = forks.observe(k, step.status, back_end.estimates, loop_closer, last=k == len(scans) - 1)
             if decided is not None:
                 back_end.switch(decided.switches)
                 loops = [lc for lc in loops if lc.anchor >= decided.fork] + ([] if decided.loop is None else

@@ -238,11 +238,18 @@ class Forks:
                             compose(jump_a, jump_b)
 
     def observe(self, k: int, status: ScanStatus, estimates: dict[int, np.ndarray],
-                loop_closer: LoopCloser) -> Decision | None:
+                loop_closer: LoopCloser, last: bool = False) -> Decision | None:
         """Scan k; the decision of a fork (or two) for its rival, else None. Each branch's best match with
         the map from before the fork is remembered from scan to scan: a rival branch walking back into that
         map matches it at once, while the chosen branch's walls on its free space pile up only over the
-        scans after."""
+        scans after.
+
+        At the walk's ``last`` scan no more evidence will come, so the contradiction alone decides at the
+        plain significance, not its square: the square guards a decision that is tested again at every
+        scan, and could wait for the next, against the many looks (a sequential test's truncation decides
+        on the evidence there is). narrow-corridor's fourth corner, eleven scans before the walk's end:
+        the fold puts 16–18 of its points on that map's free space against the rival's 1–2
+        (P = 4·10⁻⁵ … 7·10⁻⁴), so whether 10⁻⁴ was reached flipped with 1 µm of range."""
         if status not in (ScanStatus.MATCHED, ScanStatus.AMBIGUOUS):
             return None
         open_keys = {f.key for f in self.open}
@@ -270,7 +277,7 @@ class Forks:
             if best is None or best.score <= (1.0 + self.cfg.fork_gain) * self.chosen_scores[fork.key]:
                 # no rival loop: an exploring rival closes none (a corridor's corner taken for the corridor
                 # folded back onto itself); the contradiction alone decides, at the square of the significance
-                if self._contradicted_more(on_free, rival_on_free, self.cfg.fork_significance**2):
+                if self._contradicted_more(on_free, rival_on_free, self.cfg.fork_significance ** (1 if last else 2)):
                     unlooped.append((rival_on_free, fork.key, fork, switches))
                 continue
             if not self._contradicted_more(on_free, rival_on_free):
