@@ -146,10 +146,13 @@ class Forks:
         while len(self.open) >= self.cfg.fork_limit:
             # room for the new fork: the oldest one goes, unless the map from before it already contradicts its
             # chosen branch (a wrong branch's trouble opens forks of its own: narrow-corridor's second corner,
-            # its fold running into the first corner four forks later); then the oldest uncontradicted one
+            # its fold running into the first corner four forks later); then the oldest uncontradicted one, and
+            # when every one is contradicted, the latest: the later ones inherit an earlier one's wrong branch
+            # (narrow-corridor's fourth corner, its fold contradicted, and two forks after it on that fold whose
+            # chosen branches are contradicted by it alone)
             contested = [self._contradicted(*self._chosen_on_free(f, k - 1, estimates, loop_closer.points))
                          for f in self.open]
-            del self.open[contested.index(False) if False in contested else 0]
+            del self.open[contested.index(False) if False in contested else -1]
         self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned]),
                               loop_closer.whole_map(keys, estimates)[0], tuple(keys), self.levels))
 

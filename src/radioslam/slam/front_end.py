@@ -184,14 +184,21 @@ class FrontEnd:
             # (a corridor folded back onto itself explains a corner's scan better than the corner does,
             # whose new walls the map has not seen yet), and so does the prediction's own fit, where the
             # candidates, ranked against the turned one, missed it (a corner's clutter)
-            fitted = correlative_match(grid, xy, phi, primary, cfg.distinct_m, np.radians(cfg.window_deg),
-                                       self.step_rad).pose
-            rivals = np.vstack([rivals, candidates[by_motion]])
-            if np.min(np.linalg.norm(rivals[:, :2] - fitted[:2], axis=1)) > cfg.distinct_m:
-                rivals = np.vstack([rivals, fitted])
+            rivals = self._with_prediction_fit(np.vstack([rivals, candidates[by_motion]]), grid, xy, phi, primary)
             status = ScanStatus.AMBIGUOUS
             turn = np.degrees(wrap_angle(pose[2] - candidates[by_motion, 2]))
             note = "; ".join(filter(None, [note, f"turned {turn:.0f}° from the motion's choice, which stays a rival"]))
+        elif (jump := float(np.linalg.norm(pose[:2] - last[:2]))) > self.motion_cfg.max_step_m:
+            # a pose no step reaches (the search window's corners lie beyond max_step_m), with no candidate near
+            # the motion left to compare (each scored below trust, or none kept): the prediction's own fit stays
+            # a rival where it is turned from the pose taken (a fork's rival: narrow-corridor's fourth corner,
+            # folded 1.6 m away, when 1 µm of range kept the motion's candidate out of branch and bound's list,
+            # and with it the fork)
+            widened = self._with_prediction_fit(rivals, grid, xy, phi, primary)
+            if len(widened) > len(rivals) and abs(wrap_angle(widened[-1, 2] - pose[2])) >= np.radians(cfg.distinct_deg):
+                rivals, status = widened, ScanStatus.AMBIGUOUS
+                note = "; ".join(filter(None, [note, f"{jump:.2f} m from the last pose, beyond a step: the "
+                                                     "prediction's fit stays a rival"]))
         if weight < 1.0:
             pose, cov = fuse(pose, cov, weight, primary, self.predicted)
             if abs(wrap_angle(primary[2] - pose[2])) >= np.radians(cfg.distinct_deg):
@@ -239,6 +246,16 @@ class FrontEnd:
         both = np.concatenate([by_motion, by_scan])
         merged, _ = distinct(both, np.zeros(len(both)), radius_m, radius_rad, 2 * count)
         return merged
+
+    def _with_prediction_fit(self, rivals: np.ndarray, grid: LikelihoodGrid, xy: np.ndarray, phi: np.ndarray,
+                             primary: np.ndarray) -> np.ndarray:
+        """``rivals`` (R, 3) and the scan's own fit near the motion's prediction ``primary`` (within
+        ``distinct_m``), unless a rival lies within ``distinct_m`` of it already."""
+        fitted = correlative_match(grid, xy, phi, primary, self.cfg.distinct_m, np.radians(self.cfg.window_deg),
+                                   self.step_rad).pose
+        if len(rivals) and np.min(np.linalg.norm(rivals[:, :2] - fitted[:2], axis=1)) <= self.cfg.distinct_m:
+            return rivals
+        return np.vstack([rivals, fitted])
 
     def _across(self, rivals: np.ndarray, pose: np.ndarray, weak: np.ndarray) -> np.ndarray:
         """The rivals that differ from ``pose`` other than by sliding along the weak direction."""
