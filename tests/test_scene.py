@@ -117,6 +117,30 @@ def test_builtins_match_their_description():
         builtin_scene("paper-cnv:3")
 
 
+def test_paper_cnv_laps_walks_the_room_again_and_again_never_retracing_a_lap():
+    """paper-cnv's room and SNR, 60 poses a lap on a radius wandering 5 ± 0.25 m, the heading the path's
+    tangent; the lap count is the argument (1 … 100), anything else one SceneError naming it."""
+    laps = builtin_scene("paper-cnv-laps:3")
+    cnv = builtin_scene("paper-cnv")
+    assert len(laps.poses) == 180 and np.array_equal(laps.segments, cnv.segments)
+    assert laps.radio.snr_db == cnv.radio.snr_db
+    radius = np.hypot(laps.poses[:, 0], laps.poses[:, 1])
+    assert 4.75 - 1e-9 <= radius.min() < 4.8 and 5.2 < radius.max() <= 5.25 + 1e-9
+    step = np.diff(laps.poses[:, :2], axis=0)
+    assert np.all(np.abs(np.linalg.norm(step, axis=1) - 2 * np.pi * 5 / 60) < 0.03)
+    # the chord of each step runs along the mean of its two tangents (an arc: the tangent turns uniformly)
+    travel = np.arctan2(step[:, 1], step[:, 0])
+    mean = laps.poses[:-1, 2] + np.angle(np.exp(1j * np.diff(laps.poses[:, 2]))) / 2
+    assert np.abs(np.angle(np.exp(1j * (travel - mean)))).max() < 1e-3
+    # the same place of the room, lap after lap, a different radius
+    assert np.abs(radius[0] - radius[60]) > 0.05 and np.abs(radius[60] - radius[120]) > 0.05
+    assert len(builtin_scene("paper-cnv-laps").poses) == 240
+    for bad in ("paper-cnv-laps:0", "paper-cnv-laps:2.5", "paper-cnv-laps:x", "glass-door:2"):
+        with pytest.raises(SceneError) as err:
+            builtin_scene(bad)
+        assert err.value.field == "(argument)"
+
+
 def test_directive_lobe_is_normalized_and_falls_off_with_incidence():
     for name, m in BUILTIN_MATERIALS.items():
         x = np.linspace(-np.pi, np.pi, 200_001)

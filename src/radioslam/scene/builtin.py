@@ -21,6 +21,9 @@ shelf-hall    a 20 m × 16 m hall with two rows of metal shelves (a cross aisle 
 narrow-corridor a 2.4 m wide corridor around a 11.2 m × 4 m block (two doors into it), walked
               once around on its centre line: every wall on the sides is 1.2 m away, inside
               the 1.5 m gate of a receiver whose leakage is not calibrated (issue #13).
+paper-cnv-laps  paper-cnv's room walked N times around (``paper-cnv-laps:16``; 4 by default),
+              60 poses a lap, the radius wandering 5 ± 0.25 m over 2.7 laps a period, so that
+              no lap retraces another: how SLAM's cost grows with revisits (issue #14).
 
 corridor-loop and shelf-hall keep the terminal 2 m from every wall: before issue #13 nearer walls
 fell inside the receiver's leakage gate (1.5 m) and only the skirts of their echoes were seen.
@@ -44,19 +47,44 @@ def _wall(points, material: str) -> dict:
     return {"points": [[float(x), float(y)] for x, y in points], "material": material}
 
 
-def paper_cnv() -> Scene:
+def _paper_cnv_walls() -> list[dict]:
     h = 8.0
     letters = [
         _wall([(-1.7, 0.5), (-2.5, 0.5), (-2.5, -0.5), (-1.7, -0.5)], "concrete"),  # C
         _wall([(-0.5, -0.5), (-0.5, 0.5), (0.5, -0.5), (0.5, 0.5)], "concrete"),  # N
         _wall([(1.5, 0.5), (2.0, -0.5), (2.5, 0.5)], "concrete"),  # V
     ]
+    return [_wall([(-h, -h), (h, -h), (h, h), (-h, h), (-h, -h)], "concrete"), *letters]
+
+
+def paper_cnv() -> Scene:
     return scene_from_mapping({
-        "version": 1, "name": "paper-cnv",
-        "walls": [_wall([(-h, -h), (h, -h), (h, h), (-h, h), (-h, -h)], "concrete"), *letters],
+        "version": 1, "name": "paper-cnv", "walls": _paper_cnv_walls(),
         "trajectory": {"circle": {"center": [0.0, 0.0], "radius": 5.0, "poses": 60, "heading": "tangent"}},
         "radio": {"snr_db": 10.0},
     }, "builtin:paper-cnv")
+
+
+LAP_POSES = 60  # per lap, as paper-cnv's circle
+LAP_RADIUS_SWING_M = 0.25  # the radius wanders 5 m ± this, over 2.7 laps a period (no lap retraces another)
+
+
+def paper_cnv_laps(laps: int = 4) -> Scene:
+    """paper-cnv's room walked ``laps`` times around its 5 m circle, the radius wandering smoothly by
+    ±0.25 m (issue #14: how SLAM's cost grows with every revisit)."""
+    i = np.arange(laps * LAP_POSES)
+    phi, wander = 2.0 * np.pi * i / LAP_POSES, 2.0 * np.pi * i / (2.7 * LAP_POSES)
+    radius = 5.0 + LAP_RADIUS_SWING_M * np.sin(wander)
+    xy = radius[:, None] * np.column_stack([np.cos(phi), np.sin(phi)])
+    # the path's tangent: r'·(cos φ, sin φ) + r·φ'·(−sin φ, cos φ), per pose index
+    radial, along = LAP_RADIUS_SWING_M * np.cos(wander) / 2.7, radius
+    heading = phi + np.pi / 2 - np.arctan2(radial, along)
+    heading = np.angle(np.exp(1j * heading))
+    return scene_from_mapping({
+        "version": 1, "name": f"paper-cnv-laps-{laps}", "walls": _paper_cnv_walls(),
+        "trajectory": {"poses": np.column_stack([xy, heading]).tolist()},
+        "radio": {"snr_db": 10.0},
+    }, f"builtin:paper-cnv-laps:{laps}")
 
 
 def glass_door() -> Scene:
@@ -156,11 +184,19 @@ BUILTIN_SCENES: dict[str, tuple[Callable[..., Scene], str]] = {
     "corridor-loop": (corridor_loop, "4 m corridor around a block of rooms, 1.2 laps, rounded corners, ±20 % speed"),
     "shelf-hall": (shelf_hall, "20 m hall, two rows of metal shelves, down and back two aisles"),
     "narrow-corridor": (narrow_corridor, "2.4 m corridor around a block, walls 1.2 m to each side, one lap"),
+    "paper-cnv-laps": (paper_cnv_laps, "paper-cnv walked N laps ('paper-cnv-laps:N', 4 by default), radius 5 ± 0.25 m"),
+}
+
+# the built-ins that take an argument: (kind, least, most, what it is)
+BUILTIN_ARGUMENTS: dict[str, tuple[type, float, float, str]] = {
+    "single-plate": (float, 0.3, 100.0, "a range, 0.3 … 100 m"),
+    "paper-cnv-laps": (int, 1, 100, "a lap count, 1 … 100"),
 }
 
 
 def builtin_scene(name: str) -> Scene:
-    """A built-in scene by name; ``single-plate:R`` passes the range R in metres."""
+    """A built-in scene by name; ``single-plate:R`` passes the range R in metres, ``paper-cnv-laps:N``
+    the number of laps."""
     base, _, arg = name.partition(":")
     if base not in BUILTIN_SCENES:
         raise SceneError(f"no such file or built-in scene (built-ins: {', '.join(BUILTIN_SCENES)})",
@@ -168,10 +204,14 @@ def builtin_scene(name: str) -> Scene:
     builder = BUILTIN_SCENES[base][0]
     if not arg:
         return builder()
+    if base not in BUILTIN_ARGUMENTS:
+        takes = "; ".join(f"{b} takes {what}" for b, (_, _, _, what) in BUILTIN_ARGUMENTS.items())
+        raise SceneError(f"{base} takes no argument ({takes})", file=name, field="(argument)")
+    kind, least, most, what = BUILTIN_ARGUMENTS[base]
     try:
-        value = float(arg)
+        value = kind(arg)
     except ValueError:
-        raise SceneError(f"'{arg}' is not a number", file=name, field="(argument)") from None
-    if base != "single-plate" or not 0.3 <= value <= 100.0:
-        raise SceneError("only single-plate takes a range, 0.3 … 100 m", file=name, field="(argument)")
+        raise SceneError(f"'{arg}' is not {what}", file=name, field="(argument)") from None
+    if not least <= value <= most:
+        raise SceneError(f"{base} takes {what}", file=name, field="(argument)")
     return builder(value)

@@ -1,0 +1,89 @@
+"""SLAM's cost as the walk grows (issue #14): paper-cnv's room walked 1, 4, … laps (``paper-cnv-laps:N``,
+60 poses a lap), scans sensed once and cached, each SLAM run in a process of its own so that its peak
+resident memory is its own. Per lap count: the median SLAM time per scan, the median of the last 10 %
+of scans (a cost that grows with the walk shows there), the loop closures, the whole run, the peak RSS,
+and where the time went: the back end's graph updates and solves (``BackEnd.add``, ``add_loops``,
+``switch``, ``finish``), the loop search (``LoopCloser.close``) and the rest (front end, forks, lost and
+found), as shares of the run. Not a test: run it on a quiet machine and quote one run's medians.
+
+    python benchmarks/bench_slam_growth.py [--laps 1 4] [--seed 1] [--cache DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from bench_robustness import cached_scans
+
+from radioslam.scene import load_scene
+from radioslam.slam import RadioSlam
+from radioslam.slam.back_end import BackEnd
+from radioslam.slam.loop_closer import LoopCloser
+
+BACK_END = ("add", "add_loops", "switch", "finish")
+
+
+def clock(cls, names: tuple[str, ...], spent: list[float]) -> None:
+    """Every method of ``cls`` in ``names`` adds its wall time to ``spent[0]``."""
+    for name in names:
+        method = getattr(cls, name)
+
+        def timed(*args, _method=method, **kwargs):
+            tick = time.perf_counter()
+            try:
+                return _method(*args, **kwargs)
+            finally:
+                spent[0] += time.perf_counter() - tick
+        setattr(cls, name, timed)
+
+
+def one_run(laps: int, seed: int, cache: Path) -> dict:
+    """SLAM on ``paper-cnv-laps:laps`` in this process: its figures as a dict."""
+    scans = cached_scans(load_scene(f"paper-cnv-laps:{laps}"), seed, cache)
+    back, search = [0.0], [0.0]
+    clock(BackEnd, BACK_END, back)
+    clock(LoopCloser, ("close",), search)
+    tick = time.perf_counter()
+    result = RadioSlam().run(scans)
+    total = time.perf_counter() - tick
+    per_scan = np.asarray(result.seconds_per_scan) * 1e3
+    tail = per_scan[-max(1, len(per_scan) // 10):]
+    return {"laps": laps, "poses": len(scans), "ms_median": float(np.median(per_scan)),
+            "ms_last_10pct": float(np.median(tail)), "loops": len(result.loop_closures), "total_s": total,
+            "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+            "back_end_share": back[0] / total, "loop_search_share": search[0] / total}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--laps", type=int, nargs="+", default=[1, 4])
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--cache", type=Path, default=Path.home() / ".cache" / "radioslam" / "growth")
+    ap.add_argument("--one", type=int, help=argparse.SUPPRESS)  # a child: one lap count, JSON on stdout
+    args = ap.parse_args()
+    if args.one is not None:
+        print(json.dumps(one_run(args.one, args.seed, args.cache)))
+        return
+    rows = []
+    for laps in args.laps:
+        done = subprocess.run([sys.executable, __file__, "--one", str(laps), "--seed", str(args.seed),
+                               "--cache", str(args.cache)], capture_output=True, text=True, check=True)
+        rows.append(json.loads(done.stdout.strip().splitlines()[-1]))
+    print(f"{'poses':>6} {'ms/scan':>8} {'last 10 %':>10} {'loops':>6} {'SLAM s':>8} {'peak RSS':>9} "
+          f"{'back end':>9} {'loop search':>12}")
+    for r in rows:
+        print(f"{r['poses']:>6} {r['ms_median']:>8.1f} {r['ms_last_10pct']:>10.1f} {r['loops']:>6} "
+              f"{r['total_s']:>8.1f} {r['peak_rss_mb']:>7.0f} MB {100 * r['back_end_share']:>8.0f} % "
+              f"{100 * r['loop_search_share']:>11.0f} %")
+    print(f"(paper-cnv-laps:N, 60 poses a lap, seed {args.seed}; target, issue #14: a flat cost per scan)")
+
+
+if __name__ == "__main__":
+    main()
