@@ -388,3 +388,29 @@ def test_pose_graph_marginals_grow_along_an_open_chain_and_a_kept_loop_shrinks_t
     rejected.add_loop(0, n - 1, between(truth[0], truth[n - 1]) + np.array([2.0, 0.0, 0.0]), step_cov)
     sigmas = rejected.marginal_sigmas(16.27)  # at the chain's poses: the loop's χ² is far outside the gate
     assert np.allclose([sigmas[k] for k in range(n)], [open_chain[k] for k in range(n)])
+
+
+def test_a_submaps_matcher_is_kept_while_its_scans_stay_put_relative_to_its_first():
+    """Cartographer keeps a finished submap's grid: a new pose-graph solution that carries the whole
+    submap rigidly, or moves its scans less than half a cell against its first one, keeps the matcher
+    (its grid and pyramid); a scan moved by more (a fork's switch, a cut) builds it again."""
+    from radioslam.slam.loop_closer import LoopCloser
+    from radioslam.slam.scan_points import ScanPoints
+    from radioslam.slam.se2 import compose
+
+    cfg = SlamConfig()
+    closer = LoopCloser.from_config(cfg)
+    wall = np.column_stack([np.full(30, 3.0), np.linspace(-1.5, 1.5, 30)])
+    for k in range(cfg.loop_closure.submap_scans):
+        closer.add(k, ScanPoints(wall, np.full(30, np.pi), np.zeros((0, 2))))
+    submap = closer.submaps[0]
+    estimates = {k: np.array([0.3 * k, 0.0, 0.0]) for k in submap.keys}
+    first = closer._matcher(submap, estimates, 2.0)
+    carried = {k: compose([5.0, -2.0, 0.7], p) for k, p in estimates.items()}  # the whole submap moved rigidly
+    assert closer._matcher(submap, carried, 2.0) is first
+    nudged = {**carried, 3: compose(carried[3], [0.01, 0.0, np.radians(0.1)])}  # a centimetre: within half a cell
+    assert closer._matcher(submap, nudged, 2.0) is first
+    moved = {**carried, 3: compose(carried[3], [0.04, 0.0, 0.0])}  # beyond half a cell
+    rebuilt = closer._matcher(submap, moved, 2.0)
+    assert rebuilt is not first
+    assert closer._matcher(submap, moved, 2.0) is rebuilt

@@ -36,11 +36,6 @@ class BackEnd:
     def from_config(cls, cfg) -> "BackEnd":
         return cls(cfg.pose_graph, cfg.motion)
 
-    @property
-    def version(self) -> int:
-        """Counts the solutions: anything derived from an older one is stale."""
-        return self.graph.version
-
     def add(self, k: int, step: Step, odometry_step: np.ndarray | None = None) -> None:
         """Pose k and the factors tying it to pose k − 1."""
         previous = self.estimates.get(k - 1)

@@ -131,6 +131,12 @@ class LoopClosureConfig(_Section):
     submap_scans: int = Field(7, ge=1)  # consecutive scans per submap (MATLAB lidarSLAM's default)
     radius_m: float = Field(3.0, gt=0)  # candidate submaps within this distance
     skip_submaps: int = Field(2, ge=0)  # never the most recent ones
+    # a submap's matcher (its grid and branch-and-bound pyramid, in its first scan's frame) is kept until
+    # one of its scans has moved this much relative to that first scan since it was built (Cartographer
+    # keeps finished submaps fixed; a solution that moves them less than half a cell leaves the grid as it
+    # was, a fork's switch or a cut moves them far more)
+    submap_rebuild_m: float = Field(0.025, gt=0)
+    submap_rebuild_deg: float = Field(0.25, gt=0)
     window_m: float = Field(1.5, gt=0)
     window_deg: float = Field(20.0, gt=0)
     min_score: float = Field(0.35, ge=0, le=1)  # normalized score: mean point likelihood

@@ -141,8 +141,7 @@ class RadioSlam:
                 loop_closer.add(k, points)
             # 7. loop closures against older submaps near the pose (or the relocalizations), then optimize
             loops = [] if step.status in (ScanStatus.SKIPPED, ScanStatus.DEGENERATE, ScanStatus.PREDICTED) else \
-                [self.loop_hook(lc) for lc in loop_closer.close(k, back_end.estimates, back_end.version,
-                                                                 back_end.drift)]
+                [self.loop_hook(lc) for lc in loop_closer.close(k, back_end.estimates, back_end.drift)]
             # 8. an ambiguous scan's rival branch that matches the map from before it far better than the chosen
             #    branch, which contradicts that map, is taken: every pose since carried by its jump
             decided = forks.observe(k, step.status, back_end.estimates, loop_closer, last=k == len(scans) - 1)

@@ -2,7 +2,9 @@
 Hess, Kohler, Rapp, Andor, "Real-time loop closure in 2D LIDAR SLAM", ICRA 2016, §V).
 
 The loop closer owns the submaps (N consecutive scans fused in the frame of the first),
-one branch-and-bound matcher per submap (built once per pose-graph solution) and the
+one branch-and-bound matcher per submap (kept while its scans stay put relative to its first one,
+as Cartographer keeps a finished submap's grid: rebuilt only once one has moved by
+``submap_rebuild_m`` or ``submap_rebuild_deg``, not at every pose-graph solution) and the
 acceptance tests of a loop:
 
 - the normalized score (mean point likelihood, in [0, 1], independent of the number of points);
@@ -75,7 +77,8 @@ class LoopCloser:
     degeneracy: DegeneracyTest
     submaps: list[Submap] = field(default_factory=list)
     points: dict[int, ScanPoints] = field(default_factory=dict)
-    matchers: dict[int, tuple[int, BranchAndBound]] = field(default_factory=dict)  # anchor → (solution, matcher)
+    matchers: dict[int, tuple[np.ndarray, BranchAndBound]] = field(default_factory=dict)  # anchor → (its scans'
+    # poses in the anchor's frame when the matcher was built, the matcher)
 
     @property
     def floor(self) -> np.ndarray:
@@ -99,14 +102,23 @@ class LoopCloser:
         return LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, nrm, np.radians(g.normal_sigma_deg),
                                           self.cfg.plane_reach_m)
 
-    def _matcher(self, submap: Submap, estimates, version: int, margin: float) -> BranchAndBound:
-        """The submap's matcher for this pose-graph solution (built once per solution)."""
-        if self.matchers.get(submap.anchor, (None,))[0] != version:
+    def _matcher(self, submap: Submap, estimates, margin: float) -> BranchAndBound:
+        """The submap's matcher, built again only once its scans have moved relative to its first one
+        (by ``submap_rebuild_m`` or ``submap_rebuild_deg``) since it was built."""
+        relative = np.array([between(estimates[submap.anchor], estimates[m]) for m in submap.keys])
+        built = self.matchers.get(submap.anchor)
+        if built is None or len(built[0]) != len(relative) or self._moved(built[0], relative):
             grid = self._grid(submap, estimates, margin)
-            self.matchers[submap.anchor] = (version, BranchAndBound(grid, self.grid_cfg.branch_levels))
+            self.matchers[submap.anchor] = (relative, BranchAndBound(grid, self.grid_cfg.branch_levels))
         return self.matchers[submap.anchor][1]
 
-    def close(self, k: int, estimates: dict[int, np.ndarray], version: int,
+    def _moved(self, before: np.ndarray, now: np.ndarray) -> bool:
+        """Whether a submap's scan poses (S, 3) in its first scan's frame moved by the rebuild tolerance."""
+        shift = np.linalg.norm(now[:, :2] - before[:, :2], axis=1).max()
+        turn = np.abs(wrap_angle(now[:, 2] - before[:, 2])).max()
+        return shift > self.cfg.submap_rebuild_m or turn > np.radians(self.cfg.submap_rebuild_deg)
+
+    def close(self, k: int, estimates: dict[int, np.ndarray],
               drift: Callable[[int, int, float], np.ndarray]) -> list[LoopClosure]:
         """Verified loop closures of scan k against older submaps near its pose; ``drift(anchor, k,
         distance)`` is the covariance the odometry accumulated between the two poses."""
@@ -117,7 +129,7 @@ class LoopCloser:
             members = np.array([estimates[m][:2] for m in s.keys])
             if np.min(np.linalg.norm(members - current[:2], axis=1)) > self.cfg.radius_m:
                 continue
-            matcher = self._matcher(s, estimates, version, margin)
+            matcher = self._matcher(s, estimates, margin)
             predicted = between(estimates[s.anchor], current)
             loop = self._match(matcher, self.points[k], predicted, drift(s.anchor, k, np.linalg.norm(predicted[:2])),
                                s.anchor, k)
