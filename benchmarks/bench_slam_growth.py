@@ -4,7 +4,8 @@ resident memory is its own. Per lap count: the median SLAM time per scan, the me
 of scans (a cost that grows with the walk shows there), the loop closures, the whole run, the peak RSS,
 and where the time went: the back end's graph updates and solves (``BackEnd.add``, ``add_loops``,
 ``switch``, ``finish``), the loop search (``LoopCloser.close``) and the rest (front end, forks, lost and
-found), as shares of the run. Not a test: run it on a quiet machine and quote one run's medians.
+found), as shares of the run, and the trajectory's ATE (a cheaper loop search must not cost accuracy).
+Not a test: run it on a quiet machine and quote one run's medians.
 
     python benchmarks/bench_slam_growth.py [--laps 1 4] [--seed 1] [--cache DIR]
 """
@@ -22,6 +23,7 @@ from pathlib import Path
 import numpy as np
 from bench_robustness import cached_scans
 
+from radioslam.eval.trajectory_metrics import ate_rmse
 from radioslam.scene import load_scene
 from radioslam.slam import RadioSlam
 from radioslam.slam.back_end import BackEnd
@@ -46,7 +48,8 @@ def clock(cls, names: tuple[str, ...], spent: list[float]) -> None:
 
 def one_run(laps: int, seed: int, cache: Path) -> dict:
     """SLAM on ``paper-cnv-laps:laps`` in this process: its figures as a dict."""
-    scans = cached_scans(load_scene(f"paper-cnv-laps:{laps}"), seed, cache)
+    scene = load_scene(f"paper-cnv-laps:{laps}")
+    scans = cached_scans(scene, seed, cache)
     back, search = [0.0], [0.0]
     clock(BackEnd, BACK_END, back)
     clock(LoopCloser, ("close",), search)
@@ -58,7 +61,8 @@ def one_run(laps: int, seed: int, cache: Path) -> dict:
     return {"laps": laps, "poses": len(scans), "ms_median": float(np.median(per_scan)),
             "ms_last_10pct": float(np.median(tail)), "loops": len(result.loop_closures), "total_s": total,
             "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
-            "back_end_share": back[0] / total, "loop_search_share": search[0] / total}
+            "back_end_share": back[0] / total, "loop_search_share": search[0] / total,
+            "ate_m": ate_rmse(result.poses, scene.poses)}
 
 
 def main() -> None:
@@ -77,11 +81,11 @@ def main() -> None:
                                "--cache", str(args.cache)], capture_output=True, text=True, check=True)
         rows.append(json.loads(done.stdout.strip().splitlines()[-1]))
     print(f"{'poses':>6} {'ms/scan':>8} {'last 10 %':>10} {'loops':>6} {'SLAM s':>8} {'peak RSS':>9} "
-          f"{'back end':>9} {'loop search':>12}")
+          f"{'back end':>9} {'loop search':>12} {'ATE m':>7}")
     for r in rows:
         print(f"{r['poses']:>6} {r['ms_median']:>8.1f} {r['ms_last_10pct']:>10.1f} {r['loops']:>6} "
               f"{r['total_s']:>8.1f} {r['peak_rss_mb']:>7.0f} MB {100 * r['back_end_share']:>8.0f} % "
-              f"{100 * r['loop_search_share']:>11.0f} %")
+              f"{100 * r['loop_search_share']:>11.0f} % {r['ate_m']:>7.3f}")
     print(f"(paper-cnv-laps:N, 60 poses a lap, seed {args.seed}; target, issue #14: a flat cost per scan)")
 
 

@@ -414,3 +414,36 @@ def test_a_submaps_matcher_is_kept_while_its_scans_stay_put_relative_to_its_firs
     rebuilt = closer._matcher(submap, moved, 2.0)
     assert rebuilt is not first
     assert closer._matcher(submap, moved, 2.0) is rebuilt
+
+
+def test_loop_search_matches_a_few_submaps_a_scan_those_tried_longest_ago_first():
+    """A place walked many times has a candidate submap from every lap: each scan is matched against
+    at most ``loop_matches_per_scan`` of them (a flat cost per scan), those never tried first, then those
+    tried longest ago, then the nearest, so that consecutive scans tie in every lap's submaps in turn."""
+    from radioslam.slam.loop_closer import LoopCloser
+    from radioslam.slam.scan_points import ScanPoints
+
+    cfg = SlamConfig()
+    lc = cfg.loop_closure
+    closer = LoopCloser.from_config(cfg)
+    empty = ScanPoints(np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)))
+    laps, per = 7, lc.submap_scans
+    estimates = {}
+    for k in range((laps + lc.skip_submaps + 1) * per):  # submaps 0 … laps − 1 at the place, then the latest
+        closer.add(k, empty)
+        lap = k // per
+        estimates[k] = np.array([0.1 * lap, 0.0, 0.0]) if lap < laps else np.array([50.0 + k, 0.0, 0.0])
+    here = np.zeros(3)
+    first = [s.anchor for s in closer._candidates(here, estimates)]
+    assert len(first) == lc.loop_matches_per_scan == 3
+    assert first == [0, per, 2 * per]  # never tried, the nearest first
+    for anchor in first:
+        closer.tried[anchor] = 100
+    second = [s.anchor for s in closer._candidates(here, estimates)]
+    assert second == [3 * per, 4 * per, 5 * per]  # the untried ones come next
+    for anchor in second:
+        closer.tried[anchor] = 101
+    third = [s.anchor for s in closer._candidates(here, estimates)]
+    assert third == [6 * per, 0, per]  # then the ones tried longest ago, nearest first among equals
+    far = np.array([20.0, 0.0, 0.0])
+    assert closer._candidates(far, estimates) == []

@@ -130,6 +130,10 @@ class LoopClosureConfig(_Section):
 
     submap_scans: int = Field(7, ge=1)  # consecutive scans per submap (MATLAB lidarSLAM's default)
     radius_m: float = Field(3.0, gt=0)  # candidate submaps within this distance
+    # matched per scan at most (a flat cost however often a place is revisited: every lap adds its submaps
+    # to the candidates), those tried longest ago first, then the nearest (Cartographer samples its
+    # candidates instead; the round robin keeps every lap's submaps tied in, deterministically)
+    loop_matches_per_scan: int = Field(3, ge=1)
     skip_submaps: int = Field(2, ge=0)  # never the most recent ones
     # a submap's matcher (its grid and branch-and-bound pyramid, in its first scan's frame) is kept until
     # one of its scans has moved this much relative to that first scan since it was built (Cartographer

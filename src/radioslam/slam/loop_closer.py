@@ -79,6 +79,7 @@ class LoopCloser:
     points: dict[int, ScanPoints] = field(default_factory=dict)
     matchers: dict[int, tuple[np.ndarray, BranchAndBound]] = field(default_factory=dict)  # anchor → (its scans'
     # poses in the anchor's frame when the matcher was built, the matcher)
+    tried: dict[int, int] = field(default_factory=dict)  # anchor → the last scan matched against it
 
     @property
     def floor(self) -> np.ndarray:
@@ -125,10 +126,8 @@ class LoopCloser:
         current = estimates[k]
         margin = max(2 * self.front_cfg.window_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
         found = []
-        for s in self.submaps[:max(0, len(self.submaps) - 1 - self.cfg.skip_submaps)]:
-            members = np.array([estimates[m][:2] for m in s.keys])
-            if np.min(np.linalg.norm(members - current[:2], axis=1)) > self.cfg.radius_m:
-                continue
+        for s in self._candidates(current, estimates):
+            self.tried[s.anchor] = k
             matcher = self._matcher(s, estimates, margin)
             predicted = between(estimates[s.anchor], current)
             loop = self._match(matcher, self.points[k], predicted, drift(s.anchor, k, np.linalg.norm(predicted[:2])),
@@ -136,6 +135,19 @@ class LoopCloser:
             if loop is not None:
                 found.append(loop)
         return found
+
+    def _candidates(self, current: np.ndarray, estimates: dict[int, np.ndarray]) -> list[Submap]:
+        """The older submaps (not the ``skip_submaps`` latest) with a scan within ``radius_m`` of the pose
+        ``current``: at most ``loop_matches_per_scan`` of them, those tried longest ago (never first),
+        then the nearest."""
+        near = []
+        for s in self.submaps[:max(0, len(self.submaps) - 1 - self.cfg.skip_submaps)]:
+            members = np.array([estimates[m][:2] for m in s.keys])
+            distance = float(np.min(np.linalg.norm(members - current[:2], axis=1)))
+            if distance <= self.cfg.radius_m:
+                near.append((self.tried.get(s.anchor, -1), distance, s.anchor, s))
+        near.sort(key=lambda c: c[:3])
+        return [c[3] for c in near[:self.cfg.loop_matches_per_scan]]
 
     def _match(self, matcher: BranchAndBound, points: ScanPoints, predicted: np.ndarray, drift: np.ndarray,
                anchor: int, key: int) -> LoopClosure | None:
