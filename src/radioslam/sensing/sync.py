@@ -34,13 +34,9 @@ class SyncResult:
     peak_to_floor_db: np.ndarray
 
 
-def pss_replica(capture: Capture, decimation: int) -> np.ndarray:
-    """The PSS symbol's useful part at f_s/decimation, unit energy, shape (N/decimation,)."""
-    return _replica(capture.radio.pss, capture.radio.n_id2, capture.numerology.fft_size // decimation)
-
-
 @lru_cache(maxsize=8)
 def _replica(pss, n_id2: int, n: int) -> np.ndarray:
+    """The PSS symbol's useful part at n samples (f_s/decimation), unit energy (read-only)."""
     p = np.arange(-63, 64)
     grid = np.zeros(n, dtype=np.complex128)
     grid[p % n] = pss_grid(pss, n_id2, p)

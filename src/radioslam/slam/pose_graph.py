@@ -36,7 +36,6 @@ class PoseGraph:
     initial: gtsam.Values = field(default_factory=gtsam.Values)
     inliers: list[int] = field(default_factory=list)  # factor indices GNC must keep
     loops: list[tuple[int, int, int]] = field(default_factory=list)  # (i, j, factor index) of each loop
-    version: int = 0  # counts the solutions: estimates derived from an older one are stale
     prior_sigmas: np.ndarray = field(default_factory=lambda: np.array([1e-4, 1e-4, 1e-5]))  # the first pose
 
     def add_pose(self, key: int, pose: np.ndarray) -> None:
@@ -91,7 +90,6 @@ class PoseGraph:
         else:
             result = gtsam.LevenbergMarquardtOptimizer(self.graph, self.initial).optimize()
         self.initial = result
-        self.version += 1
         return {int(k): np.array([result.atPose2(k).x(), result.atPose2(k).y(), result.atPose2(k).theta()])
                 for k in result.keys()}
 

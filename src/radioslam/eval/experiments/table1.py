@@ -54,10 +54,9 @@ class Table1Result:
                 "rmse_paper_bisection_m": self.rmse_paper_bisection_m}
 
 
-def plate_errors(radio: RadioConfig, receiver: Receiver, range_m: float, trials: int, seed: int,
-                 paper: Receiver | None = None):
+def plate_errors(radio: RadioConfig, receiver: Receiver, paper: Receiver, range_m: float, trials: int, seed: int):
     """(ε1, ε2, ε2 of ``paper``, the same receiver refining by the paper's bisection) of ``trials``
-    captures of the plate at ``range_m``, each (trials,) (the last NaN without ``paper``)."""
+    captures of the plate at ``range_m``, each (trials,)."""
     sim = plate_simulator(radio, range_m)
     e1, e2, e3 = [], [], []
     for child in np.random.SeedSequence(seed).spawn(trials):
@@ -69,7 +68,7 @@ def plate_errors(radio: RadioConfig, receiver: Receiver, range_m: float, trials:
         gated = np.where(res.profile_range_m[0] >= NEAR_GATE_M, power, -np.inf)
         e1.append(res.profile_range_m[0, np.argmax(gated)] - range_m)
         e2.append(res.range_m[0, 0] - range_m)
-        e3.append(np.nan if paper is None else paper.sense(capture).range_m[0, 0] - range_m)
+        e3.append(paper.sense(capture).range_m[0, 0] - range_m)
     return np.array(e1), np.array(e2), np.array(e3)
 
 
@@ -102,7 +101,7 @@ def run_table1(radio: RadioConfig | None = None, trials: int = 20, seed: int = 0
     paper = Receiver(radio, cal.hardware_delay_s,
                      SensingConfig(min_range_m=NEAR_GATE_M, refine=Refinement.PAPER_BISECTION), cal.leakage)
     # 2. ε1 and ε2 (the receiver's refinement and the paper's bisection) over many noise trials per range
-    errors = [plate_errors(radio, receiver, float(r), trials, seed + 100 + k, paper) for k, r in enumerate(ranges)]
+    errors = [plate_errors(radio, receiver, paper, float(r), trials, seed + 100 + k) for k, r in enumerate(ranges)]
     e1, e2, e3 = (np.array([e[i] for e in errors]) for i in range(3))
     # 3. the bisection against the CRB (calibration exact here, to isolate the estimator)
     snr = np.asarray(crb_snr_db, dtype=np.float64)
