@@ -390,6 +390,51 @@ def test_pose_graph_marginals_grow_along_an_open_chain_and_a_kept_loop_shrinks_t
     assert np.allclose([sigmas[k] for k in range(n)], [open_chain[k] for k in range(n)])
 
 
+def test_the_back_end_solves_incrementally_and_the_batch_solve_decides_only_a_doubtful_loop():
+    """Issue #14: the back end's incremental solution (iSAM2) after each loop equals the batch
+    Levenberg–Marquardt solution of the same graph; a consistent loop never calls the robust batch
+    solve; a wrong loop (2 m off) leaves a residual beyond GNC's inlier threshold there, so the batch
+    solve runs, rejects it, and the trajectory is the one without it."""
+    from radioslam.slam.back_end import BackEnd
+    from radioslam.slam.front_end import Step
+    from radioslam.slam.loop_closer import LoopClosure
+    from radioslam.slam.se2 import between, compose, pose_covariance
+
+    rng = np.random.default_rng(3)
+    n, step_cov, loop_cov = 40, pose_covariance(0.01, 0.2), pose_covariance(0.03, 0.5)
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    truth = np.stack([3 * np.cos(t), 3 * np.sin(t), t + np.pi / 2], axis=1)
+
+    def walk(loop_offsets: dict[int, np.ndarray]) -> BackEnd:
+        back_end, pose = BackEnd.from_config(SlamConfig()), truth[0]
+        for k in range(n):
+            if k:
+                noisy = between(truth[k - 1], truth[k]) + rng.normal(0, [0.01, 0.01, np.radians(0.2)])
+                pose = compose(back_end.estimates[k - 1], noisy)
+            back_end.add(k, Step(pose, step_cov, ScanStatus.MATCHED))
+            if k in loop_offsets:  # scan k seen again from scan 0's submap
+                relative = compose(between(truth[0], truth[k]), loop_offsets[k])
+                back_end.add_loops([LoopClosure(0, k, relative, loop_cov, 0.9)])
+        back_end.finish()
+        return back_end
+
+    def batch(back_end: BackEnd) -> np.ndarray:
+        back_end.graph.move(back_end.estimates)
+        return np.array([back_end.graph.optimize(robust=False)[0][k] for k in range(n)])
+
+    consistent = walk({k: np.zeros(3) for k in (30, 35, 39)})
+    incremental = np.array([consistent.estimates[k] for k in range(n)])
+    assert consistent.batch_solves == 0
+    assert np.abs(incremental - batch(consistent)).max() < 1e-5
+    assert np.abs(incremental[-1, :2] - truth[-1, :2]).max() < 0.05  # the loops pulled the end back
+    rng = np.random.default_rng(3)
+    spoiled = walk({30: np.zeros(3), 35: np.array([2.0, 0.0, 0.0]), 39: np.zeros(3)})
+    assert spoiled.batch_solves >= 1
+    rng = np.random.default_rng(3)
+    without = walk({30: np.zeros(3), 39: np.zeros(3)})
+    assert np.abs(np.array([spoiled.estimates[k] - without.estimates[k] for k in range(n)])).max() < 1e-3
+
+
 def test_a_submaps_matcher_is_kept_while_its_scans_stay_put_relative_to_its_first():
     """Cartographer keeps a finished submap's grid: a new pose-graph solution that carries the whole
     submap rigidly, or moves its scans less than half a cell against its first one, keeps the matcher

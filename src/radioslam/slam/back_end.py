@@ -1,5 +1,9 @@
 """The back end (issue #12): owns the pose graph (:mod:`radioslam.slam.pose_graph`), the latest
-pose estimates, and when to optimize: whenever loop closures were added, and once at the end.
+pose estimates, and how to solve (issue #14): every scan's factors go into the incremental smoother
+(:mod:`radioslam.slam.incremental`, iSAM2), which gives the solution whenever loop closures were
+added; the robust batch solve of the whole graph (GNC) runs only when a loop's residual there is
+beyond the inlier threshold, or after a factor already in the graph was changed (a kidnap's step cut,
+a fork's branch switched), and the smoother is then built again from the loops it kept.
 
 Each front-end step becomes a between factor from the previous pose with the step's
 covariance expressed in that pose's frame; external odometry adds its own between factor
@@ -13,9 +17,10 @@ import numpy as np
 
 from radioslam.slam.config import MotionConfig, PoseGraphConfig
 from radioslam.slam.front_end import Step
+from radioslam.slam.incremental import IncrementalSmoother
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
 from radioslam.slam.motion import jump_covariance
-from radioslam.slam.pose_graph import PoseGraph, local_covariance
+from radioslam.slam.pose_graph import LOOP_INLIER_CHI2, PoseGraph, local_covariance
 from radioslam.slam.se2 import between, compose, inverse, pose_covariance
 
 
@@ -31,6 +36,9 @@ class BackEnd:
         self.chain: dict[int, np.ndarray] = {}  # the front end's steps composed: no loops, no optimization
         self.step_covariance: dict[int, np.ndarray] = {}  # each step's covariance in its previous pose's frame
         self.loops: list[LoopClosure] = []
+        self.smoother = IncrementalSmoother()
+        self.stale = False  # a factor changed since the smoother was built: the next solve is the batch one
+        self.batch_solves = 0
 
     @classmethod
     def from_config(cls, cfg) -> "BackEnd":
@@ -38,7 +46,7 @@ class BackEnd:
 
     def add(self, k: int, step: Step, odometry_step: np.ndarray | None = None) -> None:
         """Pose k and the factors tying it to pose k − 1."""
-        previous = self.estimates.get(k - 1)
+        previous, since = self.estimates.get(k - 1), self.graph.graph.size()
         self.graph.add_pose(k, step.pose)
         if previous is None:
             self.chain[k] = step.pose
@@ -50,14 +58,48 @@ class BackEnd:
                 self.graph.add_odometry(k - 1, k, odometry_step, self.odometry_noise)
             self.chain[k] = compose(self.chain[k - 1], relative)
         self.estimates[k] = step.pose
+        self.smoother.add_pose(k, self.graph.initial.atPose2(k))
+        self._forward(since)
 
     def add_loops(self, loops: list[LoopClosure]) -> None:
         """Loop closures (and relocalizations) into the graph, then a new solution."""
+        since = self.graph.graph.size()
         for loop in loops:
             self.graph.add_loop(loop.anchor, loop.key, loop.relative, loop.covariance, known_inlier=loop.relocalization)
             self.loops.append(loop)
         if loops:
-            self.estimates.update(self.graph.optimize(self.cfg.gnc))
+            self._forward(since)
+            self._solve()
+
+    def _forward(self, since: int) -> None:
+        """The pose graph's factors from index ``since`` on into the smoother (not while it is stale)."""
+        if not self.stale:
+            self._feed(self.graph.factors(since))
+
+    def _solve(self) -> None:
+        """The smoother's solution; the batch one when it is stale or doubts a loop."""
+        if not self.stale:
+            self.estimates.update(enumerate(self.smoother.solve()))
+        if self.stale or (self.cfg.gnc and self.smoother.doubtful(LOOP_INLIER_CHI2)):
+            self._batch()
+
+    def _batch(self) -> None:
+        """The robust batch solve from the latest estimates; the smoother built again from its solution
+        and every factor but the loops it rejected."""
+        self.graph.move(self.estimates)
+        solution, rejected = self.graph.optimize(self.cfg.gnc)
+        self.batch_solves += 1
+        self.smoother, self.stale = IncrementalSmoother(), False
+        for key in sorted(solution):
+            self.smoother.add_pose(key, self.graph.initial.atPose2(key))
+        self._feed(self.graph.factors(excluded=rejected))
+        self.estimates.update(enumerate(self.smoother.solve()))  # with the loops GNC dropped but the solution keeps
+
+    def _feed(self, factors) -> None:
+        """Pose-graph factors (index, factor) into the smoother, loops marked as ones it may doubt."""
+        for index, factor in factors:
+            self.smoother.add_factor(factor, index if index in self.graph.doubtable else None)
+        self.smoother.update()
 
     def cut(self, k: int) -> None:
         """The front end's step into pose k was a jump it did not see (a kidnapped terminal): it
@@ -65,6 +107,7 @@ class BackEnd:
         if k in self.step_factor:
             self.step_covariance[k] = self.jump_covariance
             self.graph.loosen(self.step_factor[k], self.jump_covariance)
+            self.stale = True
 
     def switch(self, switches: list[tuple[int, np.ndarray]]) -> None:
         """The front end's steps into the poses k of ``switches`` (k, jump) were rivals'
@@ -73,12 +116,10 @@ class BackEnd:
         older ones (made in the branch left) lose their weight; then the graph is solved again."""
         for k, jump in switches:
             self._carry(k, jump)
-        self.estimates.update(self.graph.optimize(self.cfg.gnc))
+        self._batch()
 
     def _carry(self, k: int, jump: np.ndarray) -> None:
-        moved = {m: compose(jump, pose) for m, pose in self.estimates.items() if m >= k}
-        self.graph.move(moved)
-        self.estimates.update(moved)
+        self.estimates.update({m: compose(jump, pose) for m, pose in self.estimates.items() if m >= k})
         if k in self.step_factor:
             self.graph.remeasure(self.step_factor[k], between(self.estimates[k - 1], self.estimates[k]))
             carried = compose(self.chain[k - 1], between(self.estimates[k - 1], self.estimates[k]))
@@ -86,6 +127,7 @@ class BackEnd:
             self.chain.update({m: compose(correction, pose) for m, pose in self.chain.items() if m >= k})
         for index in [index for anchor, key, index in self.graph.loops if anchor < k <= key]:
             self.graph.loosen(index, self.jump_covariance)
+        self.stale = True
         self.loops = [loop for loop in self.loops if not loop.anchor < k <= loop.key]
 
     def relocalized_pose(self, loop: LoopClosure) -> np.ndarray:
@@ -101,10 +143,11 @@ class BackEnd:
 
     def pose_sigmas(self, count: int) -> np.ndarray | None:
         """(count, 3) standard deviations of poses 0 … count − 1 at the latest solution (None: undetermined)."""
+        self.graph.move(self.estimates)
         sigmas = self.graph.marginal_sigmas(self.cfg.inlier_chi2)
         return None if sigmas is None else np.array([sigmas[k] for k in range(count)])
 
     def finish(self) -> None:
         """A last solution when any loop was closed."""
         if self.loops:
-            self.estimates.update(self.graph.optimize(self.cfg.gnc))
+            self._solve()

@@ -1,8 +1,10 @@
 """Pose graph over SE(2) with GTSAM (Dellaert & Kaess, "Factor Graphs for Robot Perception",
-2017): Pose2 between factors from the scan matcher's covariances, Levenberg–Marquardt, and
-loop factors made robust to false closures with graduated non-convexity (Yang, Antonante,
-Tzoumas, Carlone, "Graduated Non-Convexity for Robust Spatial Perception", RA-L 2020):
-``GncLMOptimizer`` with the prior and the odometry as known inliers.
+2017): Pose2 between factors from the scan matcher's covariances, and the batch solve:
+Levenberg–Marquardt, with loop factors made robust to false closures by graduated non-convexity
+(Yang, Antonante, Tzoumas, Carlone, "Graduated Non-Convexity for Robust Spatial Perception", RA-L
+2020): ``GncLMOptimizer`` with the prior, the odometry and the relocalizations as known inliers,
+truncated least squares rejecting a loop whose χ² exceeds χ²(3) at ``INLIER_PROBABILITY``. The back
+end runs it only when the incremental smoother (:mod:`radioslam.slam.incremental`) doubts a loop.
 """
 
 from __future__ import annotations
@@ -11,8 +13,14 @@ from dataclasses import dataclass, field
 
 import gtsam
 import numpy as np
+from scipy.stats import chi2
+
 
 from radioslam.slam.se2 import rotation
+
+
+INLIER_PROBABILITY = 0.99  # GNC's default: an inlier's χ² lies below its threshold with this probability
+LOOP_INLIER_CHI2 = float(chi2.ppf(INLIER_PROBABILITY, 3))  # 11.34: a loop beyond it at the solution is rejected
 
 
 def _pose2(p: np.ndarray) -> gtsam.Pose2:
@@ -36,6 +44,7 @@ class PoseGraph:
     initial: gtsam.Values = field(default_factory=gtsam.Values)
     inliers: list[int] = field(default_factory=list)  # factor indices GNC must keep
     loops: list[tuple[int, int, int]] = field(default_factory=list)  # (i, j, factor index) of each loop
+    doubtable: set[int] = field(default_factory=set)  # the loops the robust solve may reject (not relocalizations)
     prior_sigmas: np.ndarray = field(default_factory=lambda: np.array([1e-4, 1e-4, 1e-5]))  # the first pose
 
     def add_pose(self, key: int, pose: np.ndarray) -> None:
@@ -67,6 +76,8 @@ class PoseGraph:
         of a lost pose to the map)."""
         if known_inlier:
             self.inliers.append(self.graph.size())
+        else:
+            self.doubtable.add(self.graph.size())
         self.loops.append((i, j, self.graph.size()))
         self._between(i, j, relative, covariance)
 
@@ -77,21 +88,34 @@ class PoseGraph:
                                                            factor.noiseModel()))
 
     def move(self, poses: dict[int, np.ndarray]) -> None:
-        """New initial values of the poses given (a branch carried elsewhere before optimizing)."""
+        """New values of the poses given (the latest estimates: the next solve starts there)."""
         for key, pose in poses.items():
             self.initial.update(key, _pose2(pose))
 
-    def optimize(self, robust: bool = True) -> dict[int, np.ndarray]:
-        """Optimized poses by key; loop factors robust (GNC, truncated least squares) when asked."""
+    def optimize(self, robust: bool = True) -> tuple[dict[int, np.ndarray], set[int]]:
+        """Optimized poses by key, and the loops (factor indices) the robust solve rejected; loop factors
+        robust (GNC, truncated least squares) when asked."""
+        rejected: set[int] = set()
         if robust and self.loops:
             params = gtsam.GncLMParams(gtsam.LevenbergMarquardtParams())
             params.setKnownInliers(self.inliers)
-            result = gtsam.GncLMOptimizer(self.graph, self.initial, params).optimize()
+            optimizer = gtsam.GncLMOptimizer(self.graph, self.initial, params)
+            optimizer.setInlierCostThresholdsAtProbability(INLIER_PROBABILITY)
+            result = optimizer.optimize()
+            weights = np.asarray(optimizer.getWeights())
+            # GNC can drop a consistent loop with a wrong one that pulled both: one whose χ² at the solution
+            # is within the threshold is kept
+            rejected = {index for _, _, index in self.loops if weights[index] < 0.5
+                        and 2.0 * self.graph.at(index).error(result) > LOOP_INLIER_CHI2}
         else:
             result = gtsam.LevenbergMarquardtOptimizer(self.graph, self.initial).optimize()
         self.initial = result
-        return {int(k): np.array([result.atPose2(k).x(), result.atPose2(k).y(), result.atPose2(k).theta()])
-                for k in result.keys()}
+        poses = gtsam.utilities.extractPose2(result)
+        return dict(zip((int(k) for k in result.keys()), poses)), rejected
+
+    def factors(self, start: int = 0, excluded: set[int] = frozenset()) -> list[tuple[int, gtsam.NonlinearFactor]]:
+        """The factors (index, factor) from index ``start`` on, but those ``excluded``."""
+        return [(index, self.graph.at(index)) for index in range(start, self.graph.size()) if index not in excluded]
 
     def marginal_sigmas(self, gate_chi2: float) -> dict[int, np.ndarray] | None:
         """Each pose's standard deviations (x, y, θ; position in the world frame) at the latest solution

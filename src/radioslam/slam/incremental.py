@@ -1,0 +1,65 @@
+"""Incremental smoothing of the pose graph (Kaess, Johannsson, Roberts, Ila, Leonard, Dellaert,
+"iSAM2: Incremental smoothing and mapping using the Bayes tree", IJRR 2012): ``gtsam.ISAM2``
+takes each scan's pose and factors as they come and re-solves only the part of the Bayes tree a
+new factor touches, so a scan costs the same after a thousand poses as after ten.
+
+It holds the factors the back end trusts (the prior, the steps, the relocalizations and the loops
+the last robust solve kept); :meth:`doubtful` names the loops whose residual at the smoother's
+solution lies beyond the inlier threshold of the robust batch solve
+(:meth:`radioslam.slam.pose_graph.PoseGraph.optimize`), which then decides.
+"""
+
+from __future__ import annotations
+
+import gtsam
+import numpy as np
+
+
+class IncrementalSmoother:
+    def __init__(self, relinearize_threshold: float = 1e-3, iterations: int = 4):
+        params = gtsam.ISAM2Params()
+        params.setRelinearizeThreshold(relinearize_threshold)
+        params.relinearizeSkip = 1
+        self.isam = gtsam.ISAM2(params)
+        self.iterations = iterations  # at most this many extra Gauss–Newton steps after a loop
+        self.tolerance = relinearize_threshold
+        self.pending = gtsam.NonlinearFactorGraph()
+        self.pending_values = gtsam.Values()
+        self.loops: dict[int, gtsam.NonlinearFactor] = {}  # the pose graph's factor index → a loop it holds
+
+    def add_pose(self, key: int, pose: gtsam.Pose2) -> None:
+        self.pending_values.insert(key, pose)
+
+    def add_factor(self, factor: gtsam.NonlinearFactor, loop_index: int | None = None) -> None:
+        """A factor for the next update; ``loop_index``: the pose graph's index of a loop it may doubt."""
+        self.pending.add(factor)
+        if loop_index is not None:
+            self.loops[loop_index] = factor
+
+    def update(self) -> None:
+        """The pending poses and factors into the Bayes tree (one Gauss–Newton step)."""
+        if self.pending.size() or self.pending_values.size():
+            self.isam.update(self.pending, self.pending_values)
+            self.pending, self.pending_values = gtsam.NonlinearFactorGraph(), gtsam.Values()
+
+    def solve(self) -> np.ndarray:
+        """(P, 3) poses by key (0 … P − 1) once the pending factors are in and the relinearized steps
+        have settled (at most ``iterations`` more steps; a loop can move poses far from where they were
+        linearized)."""
+        self.update()
+        poses = gtsam.utilities.extractPose2(self.isam.calculateEstimate())
+        for _ in range(self.iterations):
+            self.isam.update()
+            settled = gtsam.utilities.extractPose2(self.isam.calculateEstimate())
+            moved = np.abs(settled - poses).max() if len(poses) else 0.0
+            poses = settled
+            if moved < self.tolerance:
+                break
+        return poses
+
+    def doubtful(self, threshold_chi2: float) -> list[int]:
+        """The loops (pose-graph indices) whose χ² at the current solution exceeds ``threshold_chi2``."""
+        if not self.loops:
+            return []
+        values = self.isam.calculateEstimate()
+        return [index for index, factor in self.loops.items() if 2.0 * factor.error(values) > threshold_chi2]
