@@ -279,7 +279,7 @@ def test_strict_turns_a_lost_stretch_into_exit_3(demo_run, tmp_path):
     ("m" + "a" * 9 + "m", []),
 ])
 def test_lost_stretches_are_predicted_runs_or_long_unfixed_runs(statuses, lost):
-    from radioslam.slam.driver import SlamResult
+    from radioslam.slam.result import SlamResult
 
     codes = {"m": ScanStatus.MATCHED, "d": ScanStatus.DEGENERATE, "p": ScanStatus.PREDICTED,
              "a": ScanStatus.AMBIGUOUS, "s": ScanStatus.SKIPPED}

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from collections.abc import Callable
 from functools import wraps
@@ -259,13 +260,32 @@ def slam(
     config: Optional[Path] = typer.Option(None, "--config", help=CONFIG_HELP),
     odometry: Optional[Path] = typer.Option(None, "--odometry", help=ODOMETRY_HELP),
     strict: bool = typer.Option(False, "--strict", help=STRICT_HELP),
+    follow: bool = typer.Option(False, "--follow", help="map each scan as it appears in scans/ (a recorder "
+                                "writing), its pose printed at once; the walk ends at scans/END, after --idle "
+                                "seconds with no new scan, or on Ctrl-C"),
+    idle: float = typer.Option(60.0, "--idle", min=0.0, help="with --follow: seconds without a new scan that end "
+                               "the walk"),
 ) -> None:
     """SLAM on the scans: trajectory.tum, trajectory_odometry.tum, map.pgm + map.yaml, map.ply, slam.json."""
-    from radioslam.pipeline import slam_stage
+    if follow:
+        from radioslam.live import follow_stage
 
-    result = slam_stage(run_dir, _slam_config(config), odometry=odometry)
+        if odometry is not None:
+            raise RadioslamError("--odometry needs every scan's pose up front; not with --follow", file=odometry,
+                                 field="--odometry")
+        result = follow_stage(run_dir, _slam_config(config), idle, _print_update)
+    else:
+        from radioslam.pipeline import slam_stage
+
+        result = slam_stage(run_dir, _slam_config(config), odometry=odometry)
     err.print(f"wrote {run_dir}: {len(result.poses)} poses, {len(result.loop_closures)} loop closures", markup=False)
     _report_slam(result, strict)
+
+
+def _print_update(update) -> None:
+    x, y, theta = update.pose
+    err.print(f"scan {update.key}: x {x:.3f} m, y {y:.3f} m, θ {math.degrees(theta):.2f}°, {update.status.value}, "
+              f"{update.seconds * 1e3:.0f} ms", markup=False)
 
 
 def _print_metrics(metrics: dict, json_out: bool) -> None:

@@ -124,7 +124,13 @@ def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = 
         result = RadioSlam(cfg).run(scans, odometry_poses)
     except RadioslamError as exc:  # the driver knows the field and reason, this stage the files
         raise RadioslamError(exc.reason, file=exc.file or run.scans, field=exc.field) from None
-    slam_s = time.perf_counter() - tick
+    write_slam_outputs(run, scans, result, cfg, {**(timings or {}), "slam": time.perf_counter() - tick}, odometry)
+    return result
+
+
+def write_slam_outputs(run: RunDir, scans: list[Scan], result: SlamResult, cfg: SlamConfig, timings: dict,
+                       odometry: Path | None = None) -> None:
+    """trajectory.tum, trajectory_odometry.tum, map.pgm + map.yaml, map.ply and slam.json of a SLAM run."""
     stamps = run.pose_timestamps(len(scans))
     write_tum(run.trajectory, stamps, result.poses)
     write_tum(run.trajectory_odometry, stamps, result.odometry)
@@ -154,10 +160,9 @@ def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = 
         "odometry": str(odometry) if odometry is not None else None,
         "warnings": result.warnings,
         "slam_ms_per_scan_median": float(np.median(result.seconds_per_scan) * 1e3),
-        "timings_s": {**(timings or {}), "slam": slam_s},
+        "timings_s": timings,
         "config": cfg.model_dump(mode="json"),
     })
-    return result
 
 
 def read_odometry(path: Path, scans: int) -> np.ndarray:

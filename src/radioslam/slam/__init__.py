@@ -4,8 +4,11 @@ correlative refinement), submaps, loop closure and relocalization, a robust pose
 and maps."""
 
 from radioslam.slam.config import SlamConfig, load_slam_config
-from radioslam.slam.driver import RadioSlam, SlamResult
+from radioslam.slam.driver import RadioSlam
 from radioslam.slam.errors import SlamError
+from radioslam.slam.result import SlamResult
+from radioslam.slam.session import ScanUpdate, SlamSession
 from radioslam.slam.status import ScanStatus
 
-__all__ = ["RadioSlam", "ScanStatus", "SlamConfig", "SlamError", "SlamResult", "load_slam_config"]
+__all__ = ["RadioSlam", "ScanStatus", "ScanUpdate", "SlamConfig", "SlamError", "SlamResult", "SlamSession",
+           "load_slam_config"]

@@ -15,9 +15,7 @@ import gtsam
 import numpy as np
 from scipy.stats import chi2
 
-
 from radioslam.slam.se2 import rotation
-
 
 INLIER_PROBABILITY = 0.99  # GNC's default: an inlier's χ² lies below its threshold with this probability
 LOOP_INLIER_CHI2 = float(chi2.ppf(INLIER_PROBABILITY, 3))  # 11.34: a loop beyond it at the solution is rejected

@@ -1,0 +1,196 @@
+"""SLAM one scan at a time (paper §IV-B; issue #14): a :class:`SlamSession` takes each radio scan as it
+comes and gives its pose at once; :meth:`SlamSession.finish` ends the walk and gives the
+:class:`~radioslam.slam.result.SlamResult`. An offline run is a session fed every scan, so a live
+session and an offline run of the same scans end with the same trajectory.
+
+The components each own one job (issue #12): the :class:`~radioslam.slam.front_end.FrontEnd`
+registers a scan against its local map, the :class:`~radioslam.slam.loop_closer.LoopCloser`
+owns the submaps, loop closures and relocalization, the
+:class:`~radioslam.slam.back_end.BackEnd` owns the pose graph. :meth:`SlamSession.add` is the story
+of one scan, one step per comment.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from radioslam.sensing.pointcloud import Scan
+from radioslam.slam.back_end import BackEnd
+from radioslam.slam.config import Anchors, SlamConfig
+from radioslam.slam.errors import SlamError
+from radioslam.slam.forks import Decision, Forks
+from radioslam.slam.front_end import FrontEnd, Step
+from radioslam.slam.loop_closer import LoopCloser, LoopClosure
+from radioslam.slam.lost_found import LostAndFound
+from radioslam.slam.plane_adjustment import PlaneAdjustment
+from radioslam.slam.result import SlamResult
+from radioslam.slam.scan_points import fused_points, prepare_points
+from radioslam.slam.status import ScanStatus
+
+
+@dataclass(frozen=True)
+class ScanUpdate:
+    """What one scan gave at once: its key, its pose (world frame, the latest solution) and status."""
+
+    key: int
+    pose: np.ndarray
+    status: ScanStatus
+    seconds: float
+
+
+class SlamSession:
+    """Built from plain settings; ``loop_hook`` lets a test replace accepted loop closures;
+    ``odometry`` (P, 3) are external odometry poses of the scans to come (their steps become between
+    factors)."""
+
+    def __init__(self, cfg: SlamConfig | None = None,
+                 loop_hook: Callable[[LoopClosure], LoopClosure] | None = None,
+                 odometry: np.ndarray | None = None):
+        self.cfg = cfg = cfg or SlamConfig()
+        self.loop_hook = loop_hook or (lambda loop: loop)
+        self.front_end, self.loop_closer = FrontEnd.from_config(cfg, odometry), LoopCloser.from_config(cfg)
+        self.back_end = BackEnd.from_config(cfg)
+        self.lost_and_found, self.forks = LostAndFound.from_config(cfg), Forks.from_config(cfg)
+        self.contradiction = Contradiction(cfg.loop_closure.contradicted_fraction, cfg.loop_closure.relocalize_gain)
+        self.steps: list[Step] = []
+        self.sightings: list[np.ndarray] = []  # each scan's sightings of walls, for the last solve
+        self.seconds: list[float] = []
+        self.lost = 0  # consecutive scans nothing matched
+        self.enough_points = False  # any scan with the points to match
+
+    @property
+    def poses(self) -> np.ndarray:
+        """(P, 3) the poses of the scans so far at the latest solution."""
+        return np.array([self.back_end.estimates[k] for k in range(len(self.steps))]).reshape(-1, 3)
+
+    def map_points(self) -> np.ndarray:
+        """(N, 2) every scan's points in the world frame at the latest solution."""
+        keys = sorted(self.loop_closer.points)
+        return fused_points(keys, self.back_end.estimates, self.loop_closer.points, np.zeros(3))[0] if keys else \
+            np.zeros((0, 2))
+
+    def add(self, scan: Scan) -> ScanUpdate:
+        """Scan k (the next one): its pose now."""
+        cfg, k, tick = self.cfg, len(self.steps), time.perf_counter()
+        front_end, loop_closer, back_end, forks = self.front_end, self.loop_closer, self.back_end, self.forks
+        self.enough_points |= len(scan) >= cfg.scan.min_points
+        # 1. the scan's points and the specular normal of the wall each came from
+        points = prepare_points(scan, cfg.scan, cfg.grid)
+        self.sightings.append(points.sightings)
+        # 2. register it against the local map: the motion's hypotheses and the scan's own rotation candidates
+        step = front_end.register(k, points, back_end.estimates)
+        # 3. a lost scan (one of a stretch nothing matched, or one whose match puts points on space the map
+        #    saw through) is searched for in the whole map: relocalized where the map explains it far better
+        self.lost = self.lost + 1 if step.status is ScanStatus.PREDICTED else 0
+        suspect = self.lost >= cfg.loop_closure.relocalize_after or self.contradiction.suspicious(step)
+        if suspect and step.status is not ScanStatus.PREDICTED and forks.contested(k, back_end.estimates,
+                                                                                  loop_closer, step, points):
+            suspect = False  # an open fork the map contradicts the choice of decides first (step 8)
+        found = loop_closer.relocalize(k, points, back_end.estimates, k - self.lost) if suspect else None
+        if found is not None and (step.status is ScanStatus.PREDICTED or self.contradiction.better(found.score, step)):
+            step = front_end.relocalized(back_end.relocalized_pose(found), found.score)
+        relocalizations = [] if found is None else [found]
+        # 4. a score drop opens a trial elsewhere in the map; once confirmed by the scans after it, the
+        #    terminal was carried there (kidnapped): every scan of the trial is relocalized
+        confirmed = self.lost_and_found.observe(k, step.status, step.pose, step.score, points, back_end.estimates,
+                                                loop_closer)
+        if confirmed:
+            back_end.cut(confirmed[0].key)
+            for loop in confirmed[:-1]:
+                self.steps[loop.key] = front_end.relocalized(back_end.relocalized_pose(loop), loop.score, confirmed)
+            step = front_end.relocalized(back_end.relocalized_pose(confirmed[-1]), confirmed[-1].score, confirmed)
+            relocalizations = confirmed
+        # 5. the pose and the factors tying it to the previous one into the pose graph
+        back_end.add(k, step, front_end.motion.odometry_step(k))
+        forks.remember(k, step, back_end.estimates, loop_closer)  # an ambiguous scan's turned rivals
+        # 6. the scan joins the local map and the current submap; the motion model learns the step
+        front_end.update(k, step, points, back_end.estimates.get(k - 1))
+        if step.status is not ScanStatus.SKIPPED:
+            loop_closer.add(k, points)
+        # 7. loop closures against older submaps near the pose (or the relocalizations)
+        loops = [] if step.status in (ScanStatus.SKIPPED, ScanStatus.DEGENERATE, ScanStatus.PREDICTED) else \
+            [self.loop_hook(lc) for lc in loop_closer.close(k, back_end.estimates, back_end.drift)]
+        # 8. an ambiguous scan's rival branch that matches the map from before it far better than the chosen
+        #    branch, which contradicts that map, is taken: every pose since carried by its jump
+        self.steps.append(step)
+        loops = self._decide(k, forks.observe(k, step.status, back_end.estimates, loop_closer), loops)
+        # 9. the loops into the pose graph, and its new solution
+        back_end.add_loops(loops + relocalizations)
+        self.seconds.append(time.perf_counter() - tick)
+        return ScanUpdate(k, np.array(back_end.estimates[k]), self.steps[k].status, self.seconds[-1])
+
+    def _decide(self, k: int, decided: Decision | None, loops: list[LoopClosure]) -> list[LoopClosure]:
+        """A fork decided at scan k: its rival's poses taken; the loops of scan k that still hold."""
+        if decided is None:
+            return loops
+        self.back_end.switch(decided.switches)
+        self.lost_and_found.forget()
+        why = ("it matches the map from before far better" if decided.loop is not None else
+               "the chosen branch put walls where the map from before saw through, the rival did not")
+        for key, _ in decided.switches:
+            self.steps[key] = self.steps[key].noted(f"its rival taken at scan {k}: {why}")
+        return [lc for lc in loops if lc.anchor >= decided.fork] + ([] if decided.loop is None else [decided.loop])
+
+    def finish(self) -> SlamResult:
+        """The walk ended: an open fork decided on the evidence there is, the last solve, the result."""
+        cfg, back_end, steps = self.cfg, self.back_end, self.steps
+        if not self.enough_points:
+            raise SlamError(f"none of the {len(steps)} scans has {cfg.scan.min_points} points or more: "
+                            "nothing to map", field="(points)")
+        # the walk's last scan: no more evidence will come, so an open fork decides at the plain significance
+        k = len(steps) - 1
+        back_end.add_loops(self._decide(k, self.forks.observe(k, steps[k].status, back_end.estimates,
+                                                              self.loop_closer, last=True), []))
+        back_end.finish()
+        # trials left undecided: another place explained their scans almost as well
+        for keys in self.lost_and_found.undecided:
+            for key in (key for key in keys if steps[key].status is not ScanStatus.RELOCALIZED):
+                steps[key] = steps[key].noted(f"another place of the map explains scans {keys[0]}–{keys[-1]} "
+                                              "almost as well (a trial left undecided)", ScanStatus.AMBIGUOUS)
+        # every pose adjusted together with the walls its specular arcs face (a smooth last solve)
+        tick = time.perf_counter()
+        poses = self.poses
+        adjuster = PlaneAdjustment.from_config(cfg.plane_adjustment) if cfg.plane_adjustment.enabled else None
+        unplaced = np.array([s.status in (ScanStatus.PREDICTED, ScanStatus.SKIPPED) for s in steps])
+        degenerate = np.array([s.status is ScanStatus.DEGENERATE for s in steps])
+        # the first scan is matched to nothing: where the step out of it fixes no position (the second
+        # scan unplaced or degenerate, a hall walked along from its start), neither is its own
+        degenerate[:1] |= (unplaced | degenerate)[1:2] & ~unplaced[:1]
+        marginal = cfg.plane_adjustment.anchors is Anchors.MARGINAL
+        adjusted = adjuster.refine(poses, self.sightings, back_end.step_covariance, unplaced, degenerate,
+                                   back_end.pose_sigmas(len(steps)) if marginal else None) if adjuster else None
+        for k in [] if adjusted is None else adjusted.placed:
+            steps[k] = steps[k].noted("placed on the walls the other scans sighted by the plane adjustment")
+        result = self._result(poses if adjusted is None else adjusted.poses)
+        return replace(result, planes=adjusted, adjustment_seconds=time.perf_counter() - tick)
+
+    def _result(self, poses: np.ndarray) -> SlamResult:
+        steps, back_end, cfg = self.steps, self.back_end, self.cfg
+        result = SlamResult(poses=poses, odometry=np.array([back_end.chain[k] for k in range(len(steps))]),
+                            status=[s.status for s in steps], match_score=np.array([s.score for s in steps]),
+                            loops=back_end.loops, seconds_per_scan=np.array(self.seconds),
+                            lost_after=cfg.loop_closure.relocalize_after,
+                            dead_reckoned_after=cfg.motion.dead_reckoned_scans)
+        result.warnings = [f"scan {k}: {s.note}" for k, s in enumerate(steps) if s.note] + result.summary_lines()
+        return result
+
+
+@dataclass
+class Contradiction:
+    """A matched scan that puts at least ``fraction`` of its points on space the map saw through is
+    suspect: exploring puts points where the map knows nothing, but a wrong place (a kidnapped
+    terminal still half-matches the room's long walls within a step of where it was) puts them
+    across free space. It is relocalized only where the map explains it ``gain`` better."""
+
+    fraction: float
+    gain: float
+
+    def suspicious(self, step: Step) -> bool:
+        return step.status is not ScanStatus.SKIPPED and step.contradicted >= self.fraction
+
+    def better(self, score: float, step: Step) -> bool:
+        return self.suspicious(step) and score >= (1.0 + self.gain) * step.score

@@ -1,0 +1,92 @@
+"""Online SLAM (issue #14): a session fed one scan at a time, and ``radioslam slam DIR --follow``
+mapping scans while a writer thread records them."""
+
+import shutil
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+
+from radioslam.io import read_scan
+
+
+def _record(src, dst, pause_s: float, end: bool) -> threading.Thread:
+    """A recorder in a thread: the scans of ``src`` written into ``dst/scans`` one by one (each to a
+    temporary name, then renamed), ``pause_s`` apart, then scans/END if ``end``."""
+
+    def write():
+        scans = dst / "scans"
+        scans.mkdir(parents=True, exist_ok=True)
+        for path in sorted((src / "scans").glob("[0-9][0-9][0-9][0-9].ply")):
+            time.sleep(pause_s)
+            shutil.copyfile(path, scans / f".{path.name}.tmp")
+            (scans / f".{path.name}.tmp").rename(scans / path.name)
+        if end:
+            (scans / "END").write_text("")
+
+    thread = threading.Thread(target=write)
+    thread.start()
+    return thread
+
+
+def test_a_session_fed_scan_by_scan_ends_with_the_offline_trajectory(demo_run):
+    """A SlamSession asked for its poses and map after every scan gives, once finished, the offline
+    run's trajectory exactly; each scan's pose is there at once, and the map grows by its points."""
+    from radioslam.slam import RadioSlam, SlamSession
+
+    out, _ = demo_run
+    scans = [read_scan(p) for p in sorted((out / "scans").glob("[0-9][0-9][0-9][0-9].ply"))]
+    offline = RadioSlam().run(scans)
+    session, sizes = SlamSession(), []
+    for k, scan in enumerate(scans):
+        update = session.add(scan)
+        assert update.key == k and np.all(np.isfinite(update.pose))
+        assert session.poses.shape == (k + 1, 3) and np.array_equal(session.poses[k], update.pose)
+        sizes.append(len(session.map_points()))
+    assert np.all(np.diff(sizes) >= 0) and sizes[-1] > 0
+    online = session.finish()
+    assert np.array_equal(online.poses, offline.poses)
+    assert [s.value for s in online.status] == [s.value for s in offline.status]
+
+
+def test_follow_maps_scans_as_a_writer_thread_records_them(demo_run, tmp_path):
+    """follow_stage while a thread writes the scans: every scan's pose reported as it comes, in order,
+    the walk ended by scans/END, and the outputs equal those of the offline slam stage on the same
+    directory (trajectory.tum byte for byte)."""
+    from radioslam.live import follow_stage
+    from radioslam.pipeline import slam_stage
+
+    out, _ = demo_run
+    count = len(list((out / "scans").glob("[0-9][0-9][0-9][0-9].ply")))
+    updates = []
+    writer = _record(out, tmp_path, 0.02, end=True)
+    follow_stage(tmp_path, idle_s=60.0, on_update=updates.append)
+    writer.join()
+    assert [u.key for u in updates] == list(range(count))
+    live = (tmp_path / "trajectory.tum").read_bytes()
+    slam_stage(tmp_path)
+    assert (tmp_path / "trajectory.tum").read_bytes() == live
+
+
+def test_follow_on_the_command_line_ends_after_the_idle_time(demo_run, tmp_path):
+    """``radioslam slam DIR --follow --idle 3`` while a thread writes (no END marker): one line per scan
+    on stderr, exit 0 after the idle time, the trajectory written; an empty directory ends in exit
+    status 2 and one line naming it."""
+    out, _ = demo_run
+    count = len(list((out / "scans").glob("[0-9][0-9][0-9][0-9].ply")))
+    writer = _record(out, tmp_path / "live", 0.05, end=False)
+    done = subprocess.run([sys.executable, "-m", "radioslam.cli", "slam", str(tmp_path / "live"), "--follow",
+                           "--idle", "3"], capture_output=True, text=True, timeout=600)
+    writer.join()
+    assert done.returncode == 0, done.stderr
+    lines = [line for line in done.stderr.splitlines() if line.startswith("scan ")]
+    assert [int(line.split(":")[0].split()[1]) for line in lines] == list(range(count))
+    assert len((tmp_path / "live" / "trajectory.tum").read_text().splitlines()) == 1 + count  # a header line
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    failed = subprocess.run([sys.executable, "-m", "radioslam.cli", "slam", str(empty), "--follow", "--idle", "0.3"],
+                            capture_output=True, text=True, timeout=120)
+    assert failed.returncode == 2
+    assert len(failed.stderr.strip().splitlines()) == 1 and "scans" in failed.stderr and "Traceback" not in failed.stderr
