@@ -89,4 +89,5 @@ def test_follow_on_the_command_line_ends_after_the_idle_time(demo_run, tmp_path)
     failed = subprocess.run([sys.executable, "-m", "radioslam.cli", "slam", str(empty), "--follow", "--idle", "0.3"],
                             capture_output=True, text=True, timeout=120)
     assert failed.returncode == 2
-    assert len(failed.stderr.strip().splitlines()) == 1 and "scans" in failed.stderr and "Traceback" not in failed.stderr
+    assert len(failed.stderr.strip().splitlines()) == 1
+    assert "scans" in failed.stderr and "Traceback" not in failed.stderr

@@ -282,6 +282,34 @@ def slam(
     _report_slam(result, strict)
 
 
+@app.command()
+@one_line_errors
+def sweep(
+    sweep_file: Path = typer.Argument(..., help="sweep YAML: scenes, seeds, snr_db, overrides, variants, robustness"),
+    out: Path = typer.Option(..., "--out", help="sweep directory: runs/, rows/, results.parquet, results.csv, plots"),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="a running Dask scheduler (tcp://HOST:8786; "
+                                            "its workers must see --out), or 'synchronous' (one by one, in this "
+                                            "process); default: a LocalCluster"),
+    workers: Optional[int] = typer.Option(None, "--workers", min=1, help="LocalCluster worker processes (default: "
+                                          "one per core)"),
+    retry_failed: bool = typer.Option(False, "--retry-failed", help="run again the runs that failed before"),
+) -> None:
+    """Monte Carlo sweep on Dask: every scene × seed × SNR × variant as a whole run; a tidy table and plots."""
+    from radioslam.sweep import load_sweep, run_sweep
+
+    spec = load_sweep(sweep_file)
+
+    def report(row: dict, done: int, total: int) -> None:
+        what = f"ATE {row['ate_rmse_m']:.3f} m" if row["status"] == "ok" else row["error"]
+        err.print(f"[{done}/{total}] {row['scene']} seed {row['seed']} snr {row['snr_db']}: {row['status']}, {what} "
+                  f"({row['run_seconds']:.0f} s)", markup=False, highlight=False, soft_wrap=True)
+
+    result = run_sweep(spec, out, scheduler, workers, retry_failed, report)
+    err.print(f"wrote {out}/results.parquet and results.csv: {len(result.table)} runs ({result.ran} run now, "
+              f"{result.skipped} finished before, {result.failed} failed) in {result.seconds:.0f} s", markup=False,
+              highlight=False, soft_wrap=True)
+
+
 def _print_update(update) -> None:
     x, y, theta = update.pose
     err.print(f"scan {update.key}: x {x:.3f} m, y {y:.3f} m, θ {math.degrees(theta):.2f}°, {update.status.value}, "

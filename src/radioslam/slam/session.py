@@ -159,7 +159,8 @@ class SlamSession:
         degenerate = np.array([s.status is ScanStatus.DEGENERATE for s in steps])
         # the first scan is matched to nothing: where the step out of it fixes no position (the second
         # scan unplaced or degenerate, a hall walked along from its start), neither is its own
-        degenerate[:1] |= (unplaced | degenerate)[1:2] & ~unplaced[:1]
+        if len(steps) > 1:
+            degenerate[0] |= (unplaced[1] or degenerate[1]) and not unplaced[0]
         marginal = cfg.plane_adjustment.anchors is Anchors.MARGINAL
         adjusted = adjuster.refine(poses, self.sightings, back_end.step_covariance, unplaced, degenerate,
                                    back_end.pose_sigmas(len(steps)) if marginal else None) if adjuster else None
