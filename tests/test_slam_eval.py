@@ -227,3 +227,22 @@ def test_reproduce_fig6_draws_the_figure_and_prints_the_starred_keys(tmp_path):
     assert doc["ate_rmse_m"] <= 0.10
     assert (tmp_path / "fig6.png").stat().st_size > 10_000 and (tmp_path / "fig6.csv").exists()
     assert (tmp_path / "fig6-run" / "report.html").exists()
+
+
+def test_specular_ranging_errors_are_the_range_minus_the_perpendicular_distance():
+    """eval.ranging: in a 10 m × 6 m room, the terminal at (2, 1) turned 30°, echoes of the four walls'
+    feet of the perpendicular at their ranges plus known errors give back those errors; a point whose
+    beam looks away from every foot, and a ghost 2 m beyond a wall, are left out."""
+    from radioslam.eval.ranging import beam_half_width_rad, specular_range_errors
+
+    corners = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 6.0], [0.0, 6.0]])
+    walls = np.stack([corners, np.roll(corners, -1, axis=0)], axis=1)
+    pose = np.array([2.0, 1.0, np.radians(30.0)])
+    world = np.radians([-90.0, 0.0, 90.0, 180.0])  # the feet: below, right, above, left
+    distance = np.array([1.0, 8.0, 5.0, 2.0])
+    made = np.array([0.003, -0.002, 0.0015, 0.004])
+    bearing = np.concatenate([world + np.radians([2.0, -3.0, 1.0, 0.5]), np.radians([45.0, 180.0])]) - pose[2]
+    ranges = np.concatenate([distance + made, [3.0, 4.0]])  # then one looking at a corner, one ghost
+    errors = specular_range_errors(pose, ranges, bearing, walls, 2 * beam_half_width_rad(8))
+    assert np.allclose(np.sort(errors), np.sort(made))
+    assert np.degrees(beam_half_width_rad(8)) == pytest.approx(6.35, abs=0.01)

@@ -15,6 +15,7 @@ import numpy as np
 
 from radioslam.errors import RadioslamError
 from radioslam.eval.map_metrics import map_coverage, map_error
+from radioslam.eval.ranging import beam_half_width_rad, specular_range_errors
 from radioslam.eval.trajectory_metrics import align, ate_rmse, rpe_rmse
 from radioslam.io import read_scan, read_tum, write_calibration, write_scan, write_tum
 from radioslam.io.atomic import atomic_write_text
@@ -200,6 +201,16 @@ def map_point_cells(run: RunDir, cloud: np.ndarray) -> dict:
     return {"map_points_occupied": float(np.mean(value == OCCUPIED)), "map_points_free": float(np.mean(value == FREE))}
 
 
+def _ranging_errors(run: RunDir, scene, truth: np.ndarray) -> np.ndarray:
+    """Every scan's specular ranging errors at the true poses (:mod:`radioslam.eval.ranging`)."""
+    tolerance = 2.0 * beam_half_width_rad(scene.radio.array_elements)  # the arc's points lie across the beam
+    files = [run.scan_file(k) for k in range(len(truth))]
+    if not all(f.exists() for f in files):
+        return np.zeros(0)
+    return np.concatenate([specular_range_errors(pose, scan.range_m, scan.angle_rad, scene.segments, tolerance)
+                           for pose, scan in zip(truth, (read_scan(f) for f in files))] or [np.zeros(0)])
+
+
 def evaluate_stage(out: Path) -> dict:
     """metrics.json (DESIGN.md §6 ★ keys) against the scene's ground truth."""
     run = RunDir(out)
@@ -216,6 +227,7 @@ def evaluate_stage(out: Path) -> dict:
     cloud = read_map_points(run.map_cloud)
     points = transform_points(transform, cloud)
     counts = summary.get("points_per_scan", [])
+    ranging = _ranging_errors(run, scene, truth)
     metrics = {
         "ate_rmse_m": ate_rmse(estimate, truth),
         "ate_rmse_odometry_m": ate_rmse(odometry, truth),
@@ -223,6 +235,8 @@ def evaluate_stage(out: Path) -> dict:
         "map_error_m": map_error(points, scene.segments),
         "map_coverage": map_coverage(points, scene.segments),
         **map_point_cells(run, cloud),
+        "ranging_rmse_m": float(np.sqrt(np.mean(ranging**2))) if len(ranging) else None,
+        "ranging_points": int(len(ranging)),
         "loop_closures": len(summary.get("loop_closures", [])),
         "poses": len(truth),
         "points_per_scan": float(np.mean(counts)) if counts else 0.0,
