@@ -134,6 +134,10 @@ class LoopClosureConfig(_Section):
     # to the candidates), those tried longest ago first, then the nearest (Cartographer samples its
     # candidates instead; the round robin keeps every lap's submaps tied in, deterministically)
     loop_matches_per_scan: int = Field(3, ge=1)
+    # a scan within this many scans of the last one that closed a loop (the walk tied to the map) searches
+    # only every this many scans (Cartographer samples its constraint searches, a ratio of 0.3); a walk not
+    # tied searches at every scan. 1: every scan searches
+    tied_search_every: int = Field(3, ge=1)
     skip_submaps: int = Field(2, ge=0)  # never the most recent ones
     # a submap's matcher (its grid and branch-and-bound pyramid, in its first scan's frame) is kept until
     # one of its scans has moved this much relative to that first scan since it was built (Cartographer

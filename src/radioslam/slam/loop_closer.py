@@ -119,6 +119,12 @@ class LoopCloser:
         turn = np.abs(wrap_angle(now[:, 2] - before[:, 2])).max()
         return shift > self.cfg.submap_rebuild_m or turn > np.radians(self.cfg.submap_rebuild_deg)
 
+    def due(self, k: int, last_tied: int | None) -> bool:
+        """Whether scan k searches for loops: always when no scan of the last ``tied_search_every`` closed one
+        (``last_tied``: the latest that did), else every ``tied_search_every``-th scan."""
+        every = self.cfg.tied_search_every
+        return last_tied is None or k - last_tied > every or k % every == 0
+
     def close(self, k: int, estimates: dict[int, np.ndarray],
               drift: Callable[[int, int, float], np.ndarray]) -> list[LoopClosure]:
         """Verified loop closures of scan k against older submaps near its pose; ``drift(anchor, k,

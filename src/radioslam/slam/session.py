@@ -111,9 +111,11 @@ class SlamSession:
         front_end.update(k, step, points, back_end.estimates.get(k - 1))
         if step.status is not ScanStatus.SKIPPED:
             loop_closer.add(k, points)
-        # 7. loop closures against older submaps near the pose (or the relocalizations)
-        loops = [] if step.status in (ScanStatus.SKIPPED, ScanStatus.DEGENERATE, ScanStatus.PREDICTED) else \
-            [self.loop_hook(lc) for lc in loop_closer.close(k, back_end.estimates, back_end.drift)]
+        # 7. loop closures against older submaps near the pose (sampled while the walk is tied to the map)
+        searching = step.status not in (ScanStatus.SKIPPED, ScanStatus.DEGENERATE, ScanStatus.PREDICTED) and \
+            loop_closer.due(k, back_end.loops[-1].key if back_end.loops else None)
+        loops = [self.loop_hook(lc) for lc in loop_closer.close(k, back_end.estimates, back_end.drift)] \
+            if searching else []
         # 8. an ambiguous scan's rival branch that matches the map from before it far better than the chosen
         #    branch, which contradicts that map, is taken: every pose since carried by its jump
         self.steps.append(step)
