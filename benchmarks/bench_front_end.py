@@ -132,10 +132,10 @@ def main() -> None:
         scene = load_scene(name)
         scans, truth = cached_scans(scene, args.seed, args.cache), scene.poses
         radio = ours(scans)
-        gicp = best([lambda k=k, m=m, d=d, c=c: small_gicp_run(scans, k, m, d, c) for k, m, d, c in
+        gicp = best([lambda k=k, m=m, d=d, c=c, s=scans: small_gicp_run(s, k, m, d, c) for k, m, d, c in
                      itertools.product(["ICP", "PLANE_ICP", "GICP", "VGICP"], [False, True], [0.05, 0.1], [0.5, 1.0])],
                     truth)
-        kiss = best([lambda v=v, c=c: kiss_icp_run(scans, v, c) for v, c in
+        kiss = best([lambda v=v, c=c, s=scans: kiss_icp_run(s, v, c) for v, c in
                      itertools.product([0.1, 0.25, 0.5], [False, True])], truth)
         print(f"{name:14} {'radioslam':11} {ate_rmse(radio['poses'], truth):7.3f} {radio['ms']:8.2f}  "
               f"(register alone {radio['register_ms']:.2f} ms)")

@@ -461,6 +461,25 @@ def test_a_submaps_matcher_is_kept_while_its_scans_stay_put_relative_to_its_firs
     assert closer._matcher(submap, moved, 2.0) is rebuilt
 
 
+def test_at_most_cached_matchers_are_kept_the_least_recently_used_dropped():
+    """A submap's matcher is 8–11 MB (its grid covers the whole room a radio scan sees): at most
+    ``cached_matchers`` are kept; the least recently used one goes and is built again when needed."""
+    from radioslam.slam.loop_closer import LoopCloser
+    from radioslam.slam.scan_points import ScanPoints
+
+    cfg = SlamConfig(loop_closure={"cached_matchers": 2, "submap_scans": 1})
+    closer = LoopCloser.from_config(cfg)
+    wall = np.column_stack([np.full(30, 3.0), np.linspace(-1.5, 1.5, 30)])
+    for k in range(3):
+        closer.add(k, ScanPoints(wall, np.full(30, np.pi), np.zeros((0, 2))))
+    estimates = {k: np.array([0.3 * k, 0.0, 0.0]) for k in range(3)}
+    first, second = (closer._matcher(closer.submaps[i], estimates, 2.0) for i in (0, 1))
+    assert closer._matcher(closer.submaps[0], estimates, 2.0) is first  # used again: now the most recent
+    closer._matcher(closer.submaps[2], estimates, 2.0)  # a third: the least recently used (the second) goes
+    assert sorted(closer.matchers) == [0, 2]
+    assert closer._matcher(closer.submaps[1], estimates, 2.0) is not second
+
+
 def test_loop_search_matches_a_few_submaps_a_scan_those_tried_longest_ago_first():
     """A place walked many times has a candidate submap from every lap: each scan is matched against
     at most ``loop_matches_per_scan`` of them (a flat cost per scan), those never tried first, then those

@@ -145,6 +145,10 @@ class LoopClosureConfig(_Section):
     # was, a fork's switch or a cut moves them far more)
     submap_rebuild_m: float = Field(0.025, gt=0)
     submap_rebuild_deg: float = Field(0.25, gt=0)
+    # at most this many submaps' matchers kept (the least recently used rebuilt when needed again): a submap's
+    # grid (and pyramid) covers what its scans saw, and a radio scan sees the whole room: 8–11 MB each in
+    # paper-cnv's 16 m room
+    cached_matchers: int = Field(32, ge=1)
     window_m: float = Field(1.5, gt=0)
     window_deg: float = Field(20.0, gt=0)
     min_score: float = Field(0.35, ge=0, le=1)  # normalized score: mean point likelihood

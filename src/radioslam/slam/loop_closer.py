@@ -4,8 +4,8 @@ Hess, Kohler, Rapp, Andor, "Real-time loop closure in 2D LIDAR SLAM", ICRA 2016,
 The loop closer owns the submaps (N consecutive scans fused in the frame of the first),
 one branch-and-bound matcher per submap (kept while its scans stay put relative to its first one,
 as Cartographer keeps a finished submap's grid: rebuilt only once one has moved by
-``submap_rebuild_m`` or ``submap_rebuild_deg``, not at every pose-graph solution) and the
-acceptance tests of a loop:
+``submap_rebuild_m`` or ``submap_rebuild_deg``, not at every pose-graph solution; at most
+``cached_matchers`` of them, the least recently used dropped) and the acceptance tests of a loop:
 
 - the normalized score (mean point likelihood, in [0, 1], independent of the number of points);
 - geometric consistency with the graph: the match must agree with the pose the odometry
@@ -107,11 +107,13 @@ class LoopCloser:
         """The submap's matcher, built again only once its scans have moved relative to its first one
         (by ``submap_rebuild_m`` or ``submap_rebuild_deg``) since it was built."""
         relative = np.array([between(estimates[submap.anchor], estimates[m]) for m in submap.keys])
-        built = self.matchers.get(submap.anchor)
+        built = self.matchers.pop(submap.anchor, None)  # put back last: the dict's order is the use order
         if built is None or len(built[0]) != len(relative) or self._moved(built[0], relative):
-            grid = self._grid(submap, estimates, margin)
-            self.matchers[submap.anchor] = (relative, BranchAndBound(grid, self.grid_cfg.branch_levels))
-        return self.matchers[submap.anchor][1]
+            built = (relative, BranchAndBound(self._grid(submap, estimates, margin), self.grid_cfg.branch_levels))
+        self.matchers[submap.anchor] = built
+        while len(self.matchers) > self.cfg.cached_matchers:  # the least recently used goes
+            del self.matchers[next(iter(self.matchers))]
+        return built[1]
 
     def _moved(self, before: np.ndarray, now: np.ndarray) -> bool:
         """Whether a submap's scan poses (S, 3) in its first scan's frame moved by the rebuild tolerance."""
