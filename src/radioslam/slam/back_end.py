@@ -92,13 +92,14 @@ class BackEnd:
         self.smoother, self.stale = IncrementalSmoother(), False
         for key in sorted(solution):
             self.smoother.add_pose(key, self.graph.initial.atPose2(key))
-        self._feed(self.graph.factors(excluded=rejected))
+        self._feed(self.graph.factors(excluded=rejected), judged=True)
         self.estimates.update(enumerate(self.smoother.solve()))  # with the loops GNC dropped but the solution keeps
 
-    def _feed(self, factors) -> None:
-        """Pose-graph factors (index, factor) into the smoother, loops marked as ones it may doubt."""
+    def _feed(self, factors, judged: bool = False) -> None:
+        """Pose-graph factors (index, factor) into the smoother, new loops marked as ones it may doubt
+        (not those the robust solve has ``judged``)."""
         for index, factor in factors:
-            self.smoother.add_factor(factor, index if index in self.graph.doubtable else None)
+            self.smoother.add_factor(factor, index if index in self.graph.doubtable and not judged else None)
         self.smoother.update()
 
     def cut(self, k: int) -> None:

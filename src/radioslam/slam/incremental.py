@@ -4,7 +4,7 @@ takes each scan's pose and factors as they come and re-solves only the part of t
 new factor touches, so a scan costs the same after a thousand poses as after ten.
 
 It holds the factors the back end trusts (the prior, the steps, the relocalizations and the loops
-the last robust solve kept); :meth:`doubtful` names the loops whose residual at the smoother's
+the last robust solve kept); :meth:`doubtful` names the new loops whose residual at the smoother's
 solution lies beyond the inlier threshold of the robust batch solve
 (:meth:`radioslam.slam.pose_graph.PoseGraph.optimize`), which then decides.
 """
@@ -25,7 +25,7 @@ class IncrementalSmoother:
         self.tolerance = relinearize_threshold
         self.pending = gtsam.NonlinearFactorGraph()
         self.pending_values = gtsam.Values()
-        self.loops: dict[int, gtsam.NonlinearFactor] = {}  # the pose graph's factor index → a loop it holds
+        self.loops: dict[int, gtsam.NonlinearFactor] = {}  # the pose graph's index → a loop not yet judged
 
     def add_pose(self, key: int, pose: gtsam.Pose2) -> None:
         self.pending_values.insert(key, pose)
@@ -58,8 +58,12 @@ class IncrementalSmoother:
         return poses
 
     def doubtful(self, threshold_chi2: float) -> list[int]:
-        """The loops (pose-graph indices) whose χ² at the current solution exceeds ``threshold_chi2``."""
+        """The loops added since the last call (pose-graph indices) whose χ² at the current solution exceeds
+        ``threshold_chi2``: a wrong loop shows its residual when it comes (the loops before it held), and
+        an older loop it pulls out of place is judged again by the robust solve it calls for."""
         if not self.loops:
             return []
         values = self.isam.calculateEstimate()
-        return [index for index, factor in self.loops.items() if 2.0 * factor.error(values) > threshold_chi2]
+        doubtful = [index for index, factor in self.loops.items() if 2.0 * factor.error(values) > threshold_chi2]
+        self.loops = {}
+        return doubtful
