@@ -91,3 +91,38 @@ def test_follow_on_the_command_line_ends_after_the_idle_time(demo_run, tmp_path)
     assert failed.returncode == 2
     assert len(failed.stderr.strip().splitlines()) == 1
     assert "scans" in failed.stderr and "Traceback" not in failed.stderr
+
+
+def test_follow_senses_recordings_as_they_appear(tmp_path):
+    """A recorder writing SigMF recordings (data, then meta renamed into place) and the calibration:
+    follow_stage senses each as it comes with calibration.json and maps it; the scan it writes equals
+    what ``radioslam sense`` makes of the same recording."""
+    from radioslam.live import follow_stage
+
+    recorded = tmp_path / "recorded"
+    done = subprocess.run([sys.executable, "-m", "radioslam.cli", "simulate", "single-plate:3", "--out", str(recorded),
+                           "--save-iq", "--seed", "2"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    live = tmp_path / "live"
+
+    def record():
+        (live / "captures").mkdir(parents=True)
+        shutil.copyfile(recorded / "calibration.json", live / "calibration.json")
+        time.sleep(0.2)
+        for suffix in (".sigmf-data", ".sigmf-meta"):
+            shutil.copyfile(recorded / "captures" / f"0000{suffix}", live / "captures" / f".tmp{suffix}")
+            (live / "captures" / f".tmp{suffix}").rename(live / "captures" / f"0000{suffix}")
+        (live / "captures" / "END").write_text("")
+
+    writer = threading.Thread(target=record)
+    writer.start()
+    updates = []
+    follow_stage(live, idle_s=60.0, on_update=updates.append)
+    writer.join()
+    assert [u.key for u in updates] == [0]
+    sensed = subprocess.run([sys.executable, "-m", "radioslam.cli", "sense", str(recorded), "--plot-pose", "-1"],
+                            capture_output=True, text=True, timeout=300)
+    assert sensed.returncode == 0, sensed.stderr
+    ours, theirs = read_scan(live / "scans" / "0000.ply"), read_scan(recorded / "scans" / "0000.ply")
+    assert len(ours) > 0 and np.array_equal(ours.range_m, theirs.range_m) and np.array_equal(ours.beam, theirs.beam)
+    assert (live / "trajectory.tum").exists()

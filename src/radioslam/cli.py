@@ -260,9 +260,10 @@ def slam(
     config: Optional[Path] = typer.Option(None, "--config", help=CONFIG_HELP),
     odometry: Optional[Path] = typer.Option(None, "--odometry", help=ODOMETRY_HELP),
     strict: bool = typer.Option(False, "--strict", help=STRICT_HELP),
-    follow: bool = typer.Option(False, "--follow", help="map each scan as it appears in scans/ (a recorder "
-                                "writing), its pose printed at once; the walk ends at scans/END, after --idle "
-                                "seconds with no new scan, or on Ctrl-C"),
+    follow: bool = typer.Option(False, "--follow", help="map each pose as its scan (scans/NNNN.ply) or "
+                                "recording (captures/NNNN.sigmf-*, sensed with calibration.json) appears, its "
+                                "pose printed at once; the walk ends at scans/END or captures/END, after --idle "
+                                "seconds with nothing new, or on Ctrl-C"),
     idle: float = typer.Option(60.0, "--idle", min=0.0, help="with --follow: seconds without a new scan that end "
                                "the walk"),
 ) -> None:
@@ -273,7 +274,7 @@ def slam(
         if odometry is not None:
             raise RadioslamError("--odometry needs every scan's pose up front; not with --follow", file=odometry,
                                  field="--odometry")
-        result = follow_stage(run_dir, _slam_config(config), idle, _print_update)
+        result = follow_stage(run_dir, _slam_config(config), idle, _print_update, _sensing_config(config))
     else:
         from radioslam.pipeline import slam_stage
 
