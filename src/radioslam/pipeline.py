@@ -203,7 +203,7 @@ def map_point_cells(run: RunDir, cloud: np.ndarray) -> dict:
 
 def _ranging_errors(run: RunDir, scene, truth: np.ndarray) -> np.ndarray:
     """Every scan's specular ranging errors at the true poses (:mod:`radioslam.eval.ranging`)."""
-    tolerance = 2.0 * beam_half_width_rad(scene.radio.array_elements)  # the arc's points lie across the beam
+    tolerance = beam_half_width_rad(scene.radio.array_elements)  # the foot within the beam's half-power width
     files = [run.scan_file(k) for k in range(len(truth))]
     if not all(f.exists() for f in files):
         return np.zeros(0)

@@ -3,8 +3,9 @@ against the Cramér–Rao bound, :mod:`radioslam.eval.crb`).
 
 A wall seen off a specular arc echoes from the foot of the perpendicular from the terminal onto it:
 the true two-way delay is 2·d⊥/c (paper eq. (7) with the specular point). A scan point at range r
-whose beam looks within ``tolerance_rad`` of that foot, on the wall segment itself, is an echo of
-that wall; its ranging error is r − d⊥ (the wall with the least |r − d⊥| where several qualify, and
+whose beam looks within ``tolerance_rad`` of that foot (the evaluation uses the beam's half-power
+half-width: farther off, diffuse scattering at d⊥/cos α competes), on the wall segment itself, is an
+echo of that wall; its ranging error is r − d⊥ (the wall with the least |r − d⊥| where several qualify, and
 none beyond ``gate_m``: a multipath ghost or a scatterer is not a ranging error). Position errors of
 the pose do not enter: the terminal stands at its true pose.
 """

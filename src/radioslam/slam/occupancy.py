@@ -29,16 +29,40 @@ class OccupancyGrid:
         return 1.0 / (1.0 + np.exp(-self.log_odds))
 
 
+@dataclass(frozen=True)
+class RayCounts:
+    """How many scans hit each cell, and how many rays cleared it (each ray counts a cell once; a cell
+    holding a point of any of these scans is never cleared)."""
+
+    hits: np.ndarray  # (NX, NY) points in each cell
+    misses: np.ndarray  # (NX, NY) rays that crossed it
+    origin: np.ndarray
+    resolution: float
+
+    def log_odds(self, cfg) -> np.ndarray:
+        """The log-odds of the counts with the ``map`` settings: a cell hit is never cleared."""
+        free = np.where(self.hits > 0, 0.0, cfg.log_odds_miss * self.misses.astype(np.float64))
+        return np.clip(cfg.log_odds_hit * self.hits + free, -cfg.log_odds_limit, cfg.log_odds_limit)
+
+
 def occupancy_grid(poses: np.ndarray, scans_xy: list[np.ndarray], cfg) -> OccupancyGrid:
     """Log-odds grid of terminal-frame scans (P_i, 2) seen from world ``poses`` (P, 3), with the
     settings of the ``map`` config section (:class:`~radioslam.slam.config.MapConfig`)."""
+    counts = ray_counts(poses, scans_xy, cfg)
+    return OccupancyGrid(counts.log_odds(cfg), counts.origin, counts.resolution)
+
+
+def ray_counts(poses: np.ndarray, scans_xy: list[np.ndarray], cfg) -> RayCounts:
+    """The hits and clearing rays of terminal-frame scans (P_i, 2) seen from ``poses`` (P, 3), on a grid
+    of ``cfg.resolution_m`` spanning them with ``cfg.margin_m``."""
     resolution, margin = cfg.resolution_m, cfg.margin_m
     ends = [transform_points(p, xy) for p, xy in zip(poses, scans_xy)]
     starts = [np.broadcast_to(p[:2], e.shape) for p, e in zip(poses, ends)]
     end, start = np.concatenate(ends + [poses[:, :2]]), np.concatenate(starts + [poses[:, :2]])
     origin = np.minimum(end.min(axis=0), start.min(axis=0)) - margin
-    shape = np.ceil((np.maximum(end.max(axis=0), start.max(axis=0)) + margin - origin) / resolution).astype(int) + 1
-    log_odds = np.zeros(shape)
+    shape = tuple(np.ceil((np.maximum(end.max(axis=0), start.max(axis=0)) + margin - origin) / resolution)
+                  .astype(int) + 1)
+    hits_count, misses_count = np.zeros(int(np.prod(shape)), np.int64), np.zeros(int(np.prod(shape)), np.int64)
     hits, rays = end[: len(end) - len(poses)], start[: len(end) - len(poses)]
     if len(hits):
         distance = np.linalg.norm(hits - rays, axis=1)
@@ -51,10 +75,9 @@ def occupancy_grid(poses: np.ndarray, scans_xy: list[np.ndarray], cfg) -> Occupa
         along = rays[ray] + (frac * length[ray])[:, None] * direction[ray]
         free = np.floor((along - origin) / resolution).astype(int)
         hit = np.ravel_multi_index(np.floor((hits - origin) / resolution).astype(int).T, shape)
-        # a cell counts once per ray; a cell holding any scan's point is never cleared
-        free_flat = np.unique(ray * log_odds.size + np.ravel_multi_index(free.T, shape))
-        free_cells = free_flat % log_odds.size
-        free_cells = free_cells[~np.isin(free_cells, hit)]
-        np.add.at(log_odds.reshape(-1), free_cells, cfg.log_odds_miss)
-        np.add.at(log_odds.reshape(-1), hit, cfg.log_odds_hit)
-    return OccupancyGrid(np.clip(log_odds, -cfg.log_odds_limit, cfg.log_odds_limit), origin, resolution)
+        # a cell counts once per ray
+        size = hits_count.size
+        free_cells = np.unique(ray * size + np.ravel_multi_index(free.T, shape)) % size
+        np.add.at(misses_count, free_cells, 1)
+        np.add.at(hits_count, hit, 1)
+    return RayCounts(hits_count.reshape(shape), misses_count.reshape(shape), origin, resolution)

@@ -26,10 +26,12 @@ from radioslam.slam.forks import Decision, Forks
 from radioslam.slam.front_end import FrontEnd, Step
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
 from radioslam.slam.lost_found import LostAndFound
+from radioslam.slam.occupancy import OccupancyGrid
 from radioslam.slam.plane_adjustment import PlaneAdjustment
 from radioslam.slam.result import SlamResult
 from radioslam.slam.scan_points import fused_points, prepare_points
 from radioslam.slam.status import ScanStatus
+from radioslam.slam.submap_map import SubmapMap
 
 
 @dataclass(frozen=True)
@@ -60,12 +62,17 @@ class SlamSession:
         self.sightings: list[np.ndarray] = []  # each scan's sightings of walls, for the last solve
         self.seconds: list[float] = []
         self.lost = 0  # consecutive scans nothing matched
+        self.map = SubmapMap(cfg.map, cfg.loop_closure.submap_scans)  # the live map, scan by scan
         self.enough_points = False  # any scan with the points to match
 
     @property
     def poses(self) -> np.ndarray:
         """(P, 3) the poses of the scans so far at the latest solution."""
         return np.array([self.back_end.estimates[k] for k in range(len(self.steps))]).reshape(-1, 3)
+
+    def occupancy(self) -> OccupancyGrid | None:
+        """The occupancy grid now: every submap's (fixed once full) at its first scan's latest pose."""
+        return self.map.grid(self.back_end.estimates)
 
     def map_points(self) -> np.ndarray:
         """(N, 2) every scan's points in the world frame at the latest solution."""
@@ -111,6 +118,7 @@ class SlamSession:
         front_end.update(k, step, points, back_end.estimates.get(k - 1))
         if step.status is not ScanStatus.SKIPPED:
             loop_closer.add(k, points)
+            self.map.add(k, scan.xy, back_end.estimates)
         # 7. loop closures against older submaps near the pose (sampled while the walk is tied to the map)
         searching = step.status not in (ScanStatus.SKIPPED, ScanStatus.DEGENERATE, ScanStatus.PREDICTED) and \
             loop_closer.due(k, back_end.loops[-1].key if back_end.loops else None)

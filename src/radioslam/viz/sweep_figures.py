@@ -81,7 +81,8 @@ def success_by_motion(table: pd.DataFrame, path: Path) -> bool:
     ax.bar(share.index, 100 * share["mean"])
     for x, (mean, size) in enumerate(share.itertuples(index=False)):
         ax.text(x, 100 * mean + 1, f"{100 * mean:.0f} % of {size}", ha="center", fontsize=8)
-    ax.set(ylabel=f"runs with ATE ≤ {SUCCESS_M} m (%)", ylim=(0, 110), title="success rate per motion class")
+    ax.set(ylabel=f"runs with ATE ≤ {SUCCESS_M} m (%)", ylim=(0, 115), title="success rate per motion class")
+    ax.tick_params(axis="x", labelrotation=30)
     _save(fig, path)
     return True
 
