@@ -246,3 +246,15 @@ def test_specular_ranging_errors_are_the_range_minus_the_perpendicular_distance(
     errors = specular_range_errors(pose, ranges, bearing, walls, 2 * beam_half_width_rad(8))
     assert np.allclose(np.sort(errors), np.sort(made))
     assert np.degrees(beam_half_width_rad(8)) == pytest.approx(6.35, abs=0.01)
+
+
+def test_the_robust_ranging_rmse_leaves_out_echoes_of_something_else():
+    """eval.ranging.robust_rmse: 200 errors of 1 mm standard deviation and 10 echoes of an obstacle 0.3 m
+    before the wall: the RMS of the 200 alone (within 3 robust standard deviations), counted as 200."""
+    from radioslam.eval.ranging import robust_rmse
+
+    rng = np.random.default_rng(4)
+    clean = rng.normal(0.0, 1e-3, 200)
+    rmse, kept = robust_rmse(np.concatenate([clean, np.full(10, -0.3)]))
+    assert kept == 200 and rmse == pytest.approx(np.sqrt(np.mean(clean**2)))
+    assert robust_rmse(np.zeros(0)) == (None, 0)

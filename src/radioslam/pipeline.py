@@ -15,7 +15,7 @@ import numpy as np
 
 from radioslam.errors import RadioslamError
 from radioslam.eval.map_metrics import map_coverage, map_error
-from radioslam.eval.ranging import beam_half_width_rad, specular_range_errors
+from radioslam.eval.ranging import beam_half_width_rad, robust_rmse, specular_range_errors
 from radioslam.eval.trajectory_metrics import align, ate_rmse, rpe_rmse
 from radioslam.io import read_scan, read_tum, write_calibration, write_scan, write_tum
 from radioslam.io.atomic import atomic_write_text
@@ -235,8 +235,8 @@ def evaluate_stage(out: Path) -> dict:
         "map_error_m": map_error(points, scene.segments),
         "map_coverage": map_coverage(points, scene.segments),
         **map_point_cells(run, cloud),
-        "ranging_rmse_m": float(np.sqrt(np.mean(ranging**2))) if len(ranging) else None,
-        "ranging_points": int(len(ranging)),
+        "ranging_rmse_m": robust_rmse(ranging)[0],
+        "ranging_points": robust_rmse(ranging)[1],
         "loop_closures": len(summary.get("loop_closures", [])),
         "poses": len(truth),
         "points_per_scan": float(np.mean(counts)) if counts else 0.0,

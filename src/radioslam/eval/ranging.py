@@ -41,3 +41,16 @@ def beam_half_width_rad(elements: int) -> float:
     """Half the half-power beamwidth of a broadside ULA of ``elements`` at half-wavelength spacing
     (0.886·λ/(N·d), Van Trees, *Optimum Array Processing*, §2.4)."""
     return 0.5 * 0.886 * 2.0 / elements
+
+
+def robust_rmse(errors: np.ndarray) -> tuple[float | None, int]:
+    """The RMS of the errors within 3 robust standard deviations (1.4826 × the median absolute
+    deviation) of their median, and how many those are: an echo of something else within the beam (an
+    obstacle before the wall, a corner) is not a ranging error of the wall's. None where there is none."""
+    errors = np.asarray(errors, dtype=np.float64)
+    if len(errors) == 0:
+        return None, 0
+    centre = np.median(errors)
+    spread = 1.4826 * np.median(np.abs(errors - centre))
+    kept = errors[np.abs(errors - centre) <= 3.0 * spread] if spread > 0 else errors
+    return float(np.sqrt(np.mean(kept**2))), int(len(kept))
