@@ -227,7 +227,7 @@ def evaluate_stage(out: Path) -> dict:
     cloud = read_map_points(run.map_cloud)
     points = transform_points(transform, cloud)
     counts = summary.get("points_per_scan", [])
-    ranging = _ranging_errors(run, scene, truth)
+    ranging_rmse, ranging_points = robust_rmse(_ranging_errors(run, scene, truth))
     metrics = {
         "ate_rmse_m": ate_rmse(estimate, truth),
         "ate_rmse_odometry_m": ate_rmse(odometry, truth),
@@ -235,8 +235,8 @@ def evaluate_stage(out: Path) -> dict:
         "map_error_m": map_error(points, scene.segments),
         "map_coverage": map_coverage(points, scene.segments),
         **map_point_cells(run, cloud),
-        "ranging_rmse_m": robust_rmse(ranging)[0],
-        "ranging_points": robust_rmse(ranging)[1],
+        "ranging_rmse_m": ranging_rmse,
+        "ranging_points": ranging_points,
         "loop_closures": len(summary.get("loop_closures", [])),
         "poses": len(truth),
         "points_per_scan": float(np.mean(counts)) if counts else 0.0,
