@@ -95,13 +95,20 @@ def test_a_synchronous_sweep_writes_the_tidy_table_and_resumes(tmp_path):
 
 
 def test_a_local_cluster_of_two_workers_gives_the_synchronous_rows(tmp_path):
-    """The same tasks on a dask.distributed LocalCluster of 2 worker processes and on the synchronous
-    scheduler: the same rows (timings aside), whatever order they finished in."""
+    """The same tasks on a dask.distributed LocalCluster of 2 worker processes, on a running cluster given
+    by its address, and on the synchronous scheduler: the same rows (timings aside), whatever order they
+    finished in."""
     spec = load_sweep(_sweep_file(tmp_path, "scenes: [single-plate:3, single-plate:5]\nseeds: [1, 2]\n"))
+    from dask.distributed import LocalCluster
+
     cluster = run_sweep(spec, tmp_path / "cluster", workers=2)
     synchronous = run_sweep(spec, tmp_path / "sync", scheduler="synchronous")
     assert cluster.ran == synchronous.ran == 4 and cluster.failed == 0
     pd.testing.assert_frame_equal(_deterministic(cluster.table), _deterministic(synchronous.table))
+    with LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=None) as running:
+        assert running.scheduler_address.startswith("tcp://")
+        remote = run_sweep(spec, tmp_path / "remote", scheduler=running.scheduler_address)  # --scheduler tcp://…
+    pd.testing.assert_frame_equal(_deterministic(remote.table), _deterministic(synchronous.table))
 
 
 def test_success_by_motion_class_is_drawn_from_generated_rows(tmp_path):
