@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 from bench_robustness import cached_scans
+from bench_slam_growth import clock
 
 from radioslam.eval.trajectory_metrics import ate_rmse
 from radioslam.scene import load_scene
@@ -45,17 +46,8 @@ def ours(scans) -> dict:
     """radioslam's front end alone: no loop closure (no candidate submap is near enough), no last solve;
     its forks, relocalization and lost-and-found stay (they are how it registers a scan)."""
     cfg = SlamConfig(loop_closure={"radius_m": 1e-9}, plane_adjustment={"enabled": False})
-    spent = [0.0]
-    register = FrontEnd.register
-
-    def timed(self, *args, **kwargs):
-        tick = time.perf_counter()
-        try:
-            return register(self, *args, **kwargs)
-        finally:
-            spent[0] += time.perf_counter() - tick
-
-    FrontEnd.register = timed
+    spent, register = [0.0], FrontEnd.register
+    clock(FrontEnd, ("register",), spent)  # timed for this run only
     try:
         session = SlamSession(cfg)
         for scan in scans:

@@ -26,6 +26,7 @@ class IncrementalSmoother:
         self.pending = gtsam.NonlinearFactorGraph()
         self.pending_values = gtsam.Values()
         self.loops: dict[int, gtsam.NonlinearFactor] = {}  # the pose graph's index → a loop not yet judged
+        self.solution = gtsam.Values()  # the last solve's
 
     def add_pose(self, key: int, pose: gtsam.Pose2) -> None:
         self.pending_values.insert(key, pose)
@@ -47,10 +48,12 @@ class IncrementalSmoother:
         have settled (at most ``iterations`` more steps; a loop can move poses far from where they were
         linearized)."""
         self.update()
-        poses = gtsam.utilities.extractPose2(self.isam.calculateEstimate())
+        self.solution = self.isam.calculateEstimate()
+        poses = gtsam.utilities.extractPose2(self.solution)
         for _ in range(self.iterations):
             self.isam.update()
-            settled = gtsam.utilities.extractPose2(self.isam.calculateEstimate())
+            self.solution = self.isam.calculateEstimate()
+            settled = gtsam.utilities.extractPose2(self.solution)
             moved = np.abs(settled - poses).max() if len(poses) else 0.0
             poses = settled
             if moved < self.tolerance:
@@ -58,12 +61,12 @@ class IncrementalSmoother:
         return poses
 
     def doubtful(self, threshold_chi2: float) -> list[int]:
-        """The loops added since the last call (pose-graph indices) whose χ² at the current solution exceeds
-        ``threshold_chi2``: a wrong loop shows its residual when it comes (the loops before it held), and
-        an older loop it pulls out of place is judged again by the robust solve it calls for."""
+        """The loops added since the last call (pose-graph indices) whose χ² at the last :meth:`solve`'s
+        solution exceeds ``threshold_chi2``: a wrong loop shows its residual when it comes (the loops before
+        it held), and an older loop it pulls out of place is judged again by the robust solve it calls for."""
         if not self.loops:
             return []
-        values = self.isam.calculateEstimate()
-        doubtful = [index for index, factor in self.loops.items() if 2.0 * factor.error(values) > threshold_chi2]
+        doubtful = [index for index, factor in self.loops.items()
+                    if 2.0 * factor.error(self.solution) > threshold_chi2]
         self.loops = {}
         return doubtful

@@ -31,8 +31,8 @@ class OccupancyGrid:
 
 @dataclass(frozen=True)
 class RayCounts:
-    """How many scans hit each cell, and how many rays cleared it (each ray counts a cell once; a cell
-    holding a point of any of these scans is never cleared)."""
+    """How many points lie in each cell, and how many rays cleared it (each ray counts a cell once; a
+    cell holding a point of any of these scans is never cleared)."""
 
     hits: np.ndarray  # (NX, NY) points in each cell
     misses: np.ndarray  # (NX, NY) rays that crossed it

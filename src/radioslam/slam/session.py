@@ -62,7 +62,7 @@ class SlamSession:
         self.sightings: list[np.ndarray] = []  # each scan's sightings of walls, for the last solve
         self.seconds: list[float] = []
         self.lost = 0  # consecutive scans nothing matched
-        self.map = SubmapMap(cfg.map, cfg.loop_closure.submap_scans)  # the live map, scan by scan
+        self.map = SubmapMap(cfg.map)  # the live map, scan by scan, in the loop closer's submaps
         self.enough_points = False  # any scan with the points to match
 
     @property
@@ -118,7 +118,7 @@ class SlamSession:
         front_end.update(k, step, points, back_end.estimates.get(k - 1))
         if step.status is not ScanStatus.SKIPPED:
             loop_closer.add(k, points)
-            self.map.add(k, scan.xy, back_end.estimates)
+            self.map.add(k, scan.xy, loop_closer.submaps[-1].anchor, back_end.estimates)
         # 7. loop closures against older submaps near the pose (sampled while the walk is tied to the map)
         searching = step.status not in (ScanStatus.SKIPPED, ScanStatus.DEGENERATE, ScanStatus.PREDICTED) and \
             loop_closer.due(k, back_end.loops[-1].key if back_end.loops else None)

@@ -28,7 +28,7 @@ class _Part:
     anchor: int
     poses: list[np.ndarray] = field(default_factory=list)  # each scan's pose in the anchor's frame, when it came
     scans: list[np.ndarray] = field(default_factory=list)  # each scan's points (terminal frame)
-    counts: RayCounts | None = None  # once full and asked for
+    counts: RayCounts | None = None  # once full (a later submap begun) and asked for
 
     def ray_counts(self, cfg: MapConfig, full: bool) -> RayCounts:
         if self.counts is not None:
@@ -42,24 +42,26 @@ class _Part:
 
 
 class SubmapMap:
-    def __init__(self, cfg: MapConfig, scans_per_submap: int):
-        self.cfg, self.size = cfg, scans_per_submap
+    def __init__(self, cfg: MapConfig):
+        self.cfg = cfg
         self.parts: list[_Part] = []
 
-    def add(self, k: int, xy: np.ndarray, estimates: dict[int, np.ndarray]) -> None:
-        """Scan k (its points ``xy``, terminal frame) at its pose in ``estimates`` joins the current submap."""
-        if not self.parts or len(self.parts[-1].poses) >= self.size:
-            self.parts.append(_Part(k))
+    def add(self, k: int, xy: np.ndarray, anchor: int, estimates: dict[int, np.ndarray]) -> None:
+        """Scan k (its points ``xy``, terminal frame) at its pose in ``estimates`` joins the submap whose
+        first scan is ``anchor`` (the loop closer's: one grouping of the scans); a new anchor starts a
+        submap and leaves the one before full."""
+        if not self.parts or self.parts[-1].anchor != anchor:
+            self.parts.append(_Part(anchor))
         part = self.parts[-1]
-        part.poses.append(between(estimates[part.anchor], estimates[k]))
+        part.poses.append(between(estimates[anchor], estimates[k]))
         part.scans.append(np.asarray(xy, dtype=np.float64).reshape(-1, 2))
 
     def grid(self, estimates: dict[int, np.ndarray]) -> OccupancyGrid | None:
-        """The world occupancy grid: every submap's log-odds placed at its first scan's latest pose
-        (nearest cell), summed and clipped; None before the first scan."""
+        """The world occupancy grid: every submap's hits and clearing rays placed at its first scan's latest
+        pose (nearest cell), summed, then their log-odds; None before the first scan."""
         if not self.parts:
             return None
-        grids = [(part.ray_counts(self.cfg, len(part.poses) >= self.size), estimates[part.anchor])
+        grids = [(part.ray_counts(self.cfg, full=part is not self.parts[-1]), estimates[part.anchor])
                  for part in self.parts]
         corners = np.concatenate([transform_points(pose, _corners(g)) for g, pose in grids])
         resolution = self.cfg.resolution_m

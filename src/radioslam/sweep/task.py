@@ -4,6 +4,7 @@ that fails is a row with its error, never an exception out of the task."""
 
 from __future__ import annotations
 
+import json
 import time
 import traceback
 import warnings
@@ -24,8 +25,6 @@ OK, FAILED = "ok", "failed"  # ★ the status column
 
 def flatten(doc: dict, prefix: str = "") -> dict:
     """metrics.json as columns: nested keys joined by '.', lists as JSON text."""
-    import json
-
     out = {}
     for key, value in doc.items():
         name = f"{prefix}{key}"
