@@ -483,7 +483,9 @@ def test_at_most_cached_matchers_are_kept_the_least_recently_used_dropped():
 def test_loop_search_matches_a_few_submaps_a_scan_those_tried_longest_ago_first():
     """A place walked many times has a candidate submap from every lap: each scan is matched against
     at most ``loop_matches_per_scan`` of them (a flat cost per scan), those never tried first, then those
-    tried longest ago, then the nearest, so that consecutive scans tie in every lap's submaps in turn."""
+    whose matchers are kept, then the others, each group those tried longest ago first, then the nearest:
+    consecutive scans tie in every lap's submaps in turn, and a dropped matcher is built again only when
+    nothing kept is near. A scan just after one that closed a loop matches ``tied_matches_per_scan``."""
     from radioslam.slam.loop_closer import LoopCloser
     from radioslam.slam.scan_points import ScanPoints
 
@@ -497,17 +499,24 @@ def test_loop_search_matches_a_few_submaps_a_scan_those_tried_longest_ago_first(
         closer.add(k, empty)
         lap = k // per
         estimates[k] = np.array([0.1 * lap, 0.0, 0.0]) if lap < laps else np.array([50.0 + k, 0.0, 0.0])
-    here = np.zeros(3)
-    first = [s.anchor for s in closer._candidates(here, estimates)]
+    here, budget = np.zeros(3), lc.loop_matches_per_scan
+    first = [s.anchor for s in closer._candidates(here, estimates, budget)]
     assert len(first) == lc.loop_matches_per_scan == 3
     assert first == [0, per, 2 * per]  # never tried, the nearest first
     for anchor in first:
         closer.tried[anchor] = 100
-    second = [s.anchor for s in closer._candidates(here, estimates)]
+    second = [s.anchor for s in closer._candidates(here, estimates, budget)]
     assert second == [3 * per, 4 * per, 5 * per]  # the untried ones come next
     for anchor in second:
         closer.tried[anchor] = 101
-    third = [s.anchor for s in closer._candidates(here, estimates)]
+    third = [s.anchor for s in closer._candidates(here, estimates, budget)]
     assert third == [6 * per, 0, per]  # then the ones tried longest ago, nearest first among equals
+    closer.tried[6 * per] = 102
+    closer.matchers = {4 * per: None, 6 * per: None}  # kept matchers come before dropped ones
+    assert [s.anchor for s in closer._candidates(here, estimates, budget)] == [4 * per, 6 * per, 0]
+    assert [s.anchor for s in closer._candidates(here, estimates, 1)] == [4 * per]
+    assert closer._candidates(here, estimates, 0) == []
     far = np.array([20.0, 0.0, 0.0])
-    assert closer._candidates(far, estimates) == []
+    assert closer._candidates(far, estimates, budget) == []
+    assert closer.budget(200, None) == closer.budget(200, 200 - lc.tied_within_scans - 1) == budget
+    assert closer.budget(200, 200 - lc.tied_within_scans) == lc.tied_matches_per_scan == 1

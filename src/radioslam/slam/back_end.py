@@ -35,6 +35,7 @@ class BackEnd:
         self.estimates: dict[int, np.ndarray] = {}  # the latest solution, every pose so far
         self.chain: dict[int, np.ndarray] = {}  # the front end's steps composed: no loops, no optimization
         self.step_covariance: dict[int, np.ndarray] = {}  # each step's covariance in its previous pose's frame
+        self.summed: list[np.ndarray] = []  # [k]: the step covariances into poses 1 … k summed (drift in O(1))
         self.loops: list[LoopClosure] = []
         self.smoother = IncrementalSmoother()
         self.stale = False  # a factor changed since the smoother was built: the next solve is the batch one
@@ -58,6 +59,7 @@ class BackEnd:
                 self.graph.add_odometry(k - 1, k, odometry_step, self.odometry_noise)
             self.chain[k] = compose(self.chain[k - 1], relative)
         self.estimates[k] = step.pose
+        self._sum_steps(k)
         self.smoother.add_pose(k, self.graph.initial.atPose2(k))
         self._forward(since)
 
@@ -107,8 +109,16 @@ class BackEnd:
         keeps only the relocalized-jump covariance (isotropic in position, so the same in every frame)."""
         if k in self.step_factor:
             self.step_covariance[k] = self.jump_covariance
+            self._sum_steps(k)
             self.graph.loosen(self.step_factor[k], self.jump_covariance)
             self.stale = True
+
+    def _sum_steps(self, since: int) -> None:
+        """The running sums of the step covariances from pose ``since`` on (a new pose, or a step changed)."""
+        del self.summed[since:]
+        for m in range(since, len(self.estimates)):
+            self.summed.append((self.summed[-1] if self.summed else np.zeros((3, 3)))
+                               + self.step_covariance.get(m, np.zeros((3, 3))))
 
     def switch(self, switches: list[tuple[int, np.ndarray]]) -> None:
         """The front end's steps into the poses k of ``switches`` (k, jump) were rivals'
@@ -138,8 +148,7 @@ class BackEnd:
     def drift(self, anchor: int, key: int, distance: float) -> np.ndarray:
         """First-order drift between two poses: the step covariances summed, the heading's variance
         also spreading the position by the distance between them."""
-        total = sum((self.step_covariance[m] for m in range(anchor + 1, key + 1) if m in self.step_covariance),
-                    np.zeros((3, 3)))
+        total = self.summed[key] - self.summed[anchor]
         return total + np.diag([total[2, 2] * distance**2] * 2 + [0.0])
 
     def pose_sigmas(self, count: int) -> np.ndarray | None:

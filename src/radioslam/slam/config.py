@@ -63,7 +63,7 @@ class FrontEndConfig(_Section):
     nearby_scans: int = Field(20, ge=0)
     nearby_radius_m: float = Field(3.0, ge=0)
     # the response surface (covariance, Olson 2009 §IV) and the final search: ±window around the
-    # winner of the wide search (loop closures use twice this window: their winner is coarser)
+    # winner of the wide search (the loop closer's too: its branch and bound ends on the same lattice)
     window_m: float = Field(0.15, gt=0)
     window_deg: float = Field(3.0, gt=0)
     angle_step_deg: float = Field(0.5, gt=0)
@@ -131,13 +131,17 @@ class LoopClosureConfig(_Section):
     submap_scans: int = Field(7, ge=1)  # consecutive scans per submap (MATLAB lidarSLAM's default)
     radius_m: float = Field(3.0, gt=0)  # candidate submaps within this distance
     # matched per scan at most (a flat cost however often a place is revisited: every lap adds its submaps
-    # to the candidates), those tried longest ago first, then the nearest (Cartographer samples its
-    # candidates instead; the round robin keeps every lap's submaps tied in, deterministically)
+    # to the candidates): never tried ones first, then those whose matchers are kept, each group the one
+    # tried longest ago first, then the nearest (Cartographer samples its candidates instead; the round robin
+    # keeps every lap's submaps tied in, deterministically, and a submap whose matcher was dropped is built
+    # again only when no kept or new one is near)
     loop_matches_per_scan: int = Field(3, ge=1)
-    # a scan within this many scans of the last one that closed a loop (the walk tied to the map) searches
-    # only every this many scans (Cartographer samples its constraint searches, a ratio of 0.3); a walk not
-    # tied searches at every scan. 1: every scan searches
-    tied_search_every: int = Field(3, ge=1)
+    # a scan within ``tied_within_scans`` of the last one that closed a loop (the walk tied to the map)
+    # matches at most ``tied_matches_per_scan`` submaps: the search budget spread evenly over the scans
+    # (Cartographer samples its constraint searches, a ratio of 0.3); a walk not tied matches
+    # ``loop_matches_per_scan`` at every scan
+    tied_within_scans: int = Field(3, ge=0)
+    tied_matches_per_scan: int = Field(1, ge=0)
     skip_submaps: int = Field(2, ge=0)  # never the most recent ones
     # a submap's matcher (its grid and branch-and-bound pyramid, in its first scan's frame) is kept until
     # one of its scans has moved this much relative to that first scan since it was built (Cartographer

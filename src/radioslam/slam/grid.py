@@ -92,23 +92,36 @@ class LikelihoodGrid:
         owner[cells[:, 0], cells[:, 1]] = np.arange(len(points))
         # the nearest hit cell of every cell, and the offset (in cells) from it
         ix, iy = distance_transform_edt(owner < 0, return_distances=False, return_indices=True)
-        nearest = np.take(owner, ix * shape[1] + iy)
         dx = np.subtract(np.arange(shape[0], dtype=np.float32)[:, None], ix, dtype=np.float32).ravel()
         dy = np.subtract(np.arange(shape[1], dtype=np.float32)[None, :], iy, dtype=np.float32).ravel()
-        d2 = (dx * dx + dy * dy) * np.float32(resolution**2)  # squared distance to the nearest hit cell centre
-        # per map point first (few), then gathered: the nearest map point's normal in every cell
+        cells2 = dx * dx + dy * dy  # squared distance to the nearest hit cell centre, in cells² (whole numbers)
+        d2 = cells2 * np.float32(resolution**2)
+        # both fields vanish beyond 6σ and the plane reach: computed only on the cells within (a fraction);
+        # a map normal matters only in a cell next to one where a field is positive (a point's bilinear
+        # corners hold its own cell), so normals are gathered a diagonal further
+        reach = max(6 * sigma, plane_reach)
+        near = np.flatnonzero(d2 < reach**2 + resolution**2)
+        beside = np.flatnonzero(d2 < (reach + 2 * resolution) ** 2)
+        nearest = np.take(owner, ix.ravel()[beside] * shape[1] + iy.ravel()[beside])  # the map point there
+        # per map point first (few), then gathered: the nearest map point's normal in those cells
         normal_p = np.full(len(points), np.nan) if normals is None else np.asarray(normals, dtype=np.float64)
         known_p = ~np.isnan(normal_p)
-        phasor = np.where(known_p, np.exp(1j * np.where(known_p, normal_p, 0.0)), 0.0).astype(np.complex64)[nearest]
-        # both fields vanish beyond 6σ and the plane reach: computed only on the cells within (a fraction)
-        near = np.flatnonzero(d2 < max(6 * sigma, plane_reach) ** 2 + resolution**2)
-        d2_near, phasor_near = d2[near], phasor.ravel()[near]
+        phasor_p = np.where(known_p, np.exp(1j * np.where(known_p, normal_p, 0.0)), 0.0).astype(np.complex64)
+        phasor = np.zeros(d2.size, dtype=np.complex64)
+        phasor[beside] = phasor_p[nearest]
+        normal = np.full(d2.size, np.nan)
+        normal[beside] = normal_p[nearest]
+        d2_near, phasor_near = d2[near], phasor[near]
         # point-to-plane: the offset along the nearest map point's normal (0 phasor: unknown), within reach
         along = phasor_near.real * dx[near] + phasor_near.imag * dy[near]
         along2 = along * along * np.float32(resolution**2)
         plane2 = np.where((phasor_near != 0) & (d2_near <= plane_reach**2), along2, d2_near)
         fields = np.zeros((2, d2.size), dtype=np.float32)  # point, then plane field
-        fields[0, near], fields[1, near] = _gaussian(d2_near, sigma), _gaussian(plane2, sigma)
+        # the point field of whole cells² by table (the same float32 products as d2's), the plane field in full
+        squares = cells2[near].astype(np.intp)
+        table = _gaussian(np.arange(squares.max() + 1 if len(squares) else 1, dtype=np.float32)
+                          * np.float32(resolution**2), sigma)
+        fields[0, near], fields[1, near] = table[squares], _gaussian(plane2, sigma)
         if free is not None and len(free) and free_penalty > 0:
             u = (free - origin) / resolution
             inside = (u[:, 0] >= 0) & (u[:, 0] < shape[0]) & (u[:, 1] >= 0) & (u[:, 1] < shape[1])
@@ -118,7 +131,7 @@ class LikelihoodGrid:
         fields = fields.reshape(2, *shape)
         fields[:, [0, -1], :] = 0.0  # lookups beyond the grid clip to its border: keep it empty
         fields[:, :, [0, -1]] = 0.0
-        grid = cls(fields[0], origin, resolution, normal_p[nearest], normal_sigma, fields[1], phasor)
+        grid = cls(fields[0], origin, resolution, normal.reshape(shape), normal_sigma, fields[1], phasor.reshape(shape))
         grid.__dict__["fields"] = fields  # the cached stack, already built
         return grid
 

@@ -22,7 +22,6 @@ class IncrementalSmoother:
         params.relinearizeSkip = 1
         self.isam = gtsam.ISAM2(params)
         self.iterations = iterations  # at most this many extra Gauss–Newton steps after a loop
-        self.tolerance = relinearize_threshold
         self.pending = gtsam.NonlinearFactorGraph()
         self.pending_values = gtsam.Values()
         self.loops: dict[int, gtsam.NonlinearFactor] = {}  # the pose graph's index → a loop not yet judged
@@ -45,20 +44,15 @@ class IncrementalSmoother:
 
     def solve(self) -> np.ndarray:
         """(P, 3) poses by key (0 … P − 1) once the pending factors are in and the relinearized steps
-        have settled (at most ``iterations`` more steps; a loop can move poses far from where they were
-        linearized)."""
+        have settled: at most ``iterations`` more steps, until one relinearizes no pose (every pose's
+        step from its linearization point within the threshold: a loop can move poses far from where
+        they were linearized). The estimate is read once, at the end: reading it costs O(P)."""
         self.update()
-        self.solution = self.isam.calculateEstimate()
-        poses = gtsam.utilities.extractPose2(self.solution)
         for _ in range(self.iterations):
-            self.isam.update()
-            self.solution = self.isam.calculateEstimate()
-            settled = gtsam.utilities.extractPose2(self.solution)
-            moved = np.abs(settled - poses).max() if len(poses) else 0.0
-            poses = settled
-            if moved < self.tolerance:
+            if not self.isam.update().getVariablesRelinearized():
                 break
-        return poses
+        self.solution = self.isam.calculateEstimate()
+        return gtsam.utilities.extractPose2(self.solution)
 
     def doubtful(self, threshold_chi2: float) -> list[int]:
         """The loops added since the last call (pose-graph indices) whose χ² at the last :meth:`solve`'s

@@ -5,7 +5,8 @@ The loop closer owns the submaps (N consecutive scans fused in the frame of the 
 one branch-and-bound matcher per submap (kept while its scans stay put relative to its first one,
 as Cartographer keeps a finished submap's grid: rebuilt only once one has moved by
 ``submap_rebuild_m`` or ``submap_rebuild_deg``, not at every pose-graph solution; at most
-``cached_matchers`` of them, the least recently used dropped) and the acceptance tests of a loop:
+``cached_matchers`` of them, the least recently used dropped, and a dropped one matched again only
+when no kept or new one is near) and the acceptance tests of a loop:
 
 - the normalized score (mean point likelihood, in [0, 1], independent of the number of points);
 - geometric consistency with the graph: the match must agree with the pose the odometry
@@ -121,20 +122,20 @@ class LoopCloser:
         turn = np.abs(wrap_angle(now[:, 2] - before[:, 2])).max()
         return shift > self.cfg.submap_rebuild_m or turn > np.radians(self.cfg.submap_rebuild_deg)
 
-    def due(self, k: int, last_tied: int | None) -> bool:
-        """Whether scan k searches for loops: always when no scan of the last ``tied_search_every`` closed one
-        (``last_tied``: the latest that did), else every ``tied_search_every``-th scan."""
-        every = self.cfg.tied_search_every
-        return last_tied is None or k - last_tied > every or k % every == 0
+    def budget(self, k: int, last_tied: int | None) -> int:
+        """How many submaps scan k matches: ``tied_matches_per_scan`` when a scan of the last
+        ``tied_within_scans`` closed a loop (``last_tied``: the latest that did), else ``loop_matches_per_scan``."""
+        tied = last_tied is not None and k - last_tied <= self.cfg.tied_within_scans
+        return self.cfg.tied_matches_per_scan if tied else self.cfg.loop_matches_per_scan
 
     def close(self, k: int, estimates: dict[int, np.ndarray],
-              drift: Callable[[int, int, float], np.ndarray]) -> list[LoopClosure]:
-        """Verified loop closures of scan k against older submaps near its pose; ``drift(anchor, k,
-        distance)`` is the covariance the odometry accumulated between the two poses."""
+              drift: Callable[[int, int, float], np.ndarray], budget: int) -> list[LoopClosure]:
+        """Verified loop closures of scan k against at most ``budget`` older submaps near its pose;
+        ``drift(anchor, k, distance)`` is the covariance the odometry accumulated between the two poses."""
         current = estimates[k]
-        margin = max(2 * self.front_cfg.window_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
+        margin = max(self.front_cfg.window_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
         found = []
-        for s in self._candidates(current, estimates):
+        for s in self._candidates(current, estimates, budget):
             self.tried[s.anchor] = k
             matcher = self._matcher(s, estimates, margin)
             predicted = between(estimates[s.anchor], current)
@@ -144,18 +145,24 @@ class LoopCloser:
                 found.append(loop)
         return found
 
-    def _candidates(self, current: np.ndarray, estimates: dict[int, np.ndarray]) -> list[Submap]:
+    def _candidates(self, current: np.ndarray, estimates: dict[int, np.ndarray], budget: int) -> list[Submap]:
         """The older submaps (not the ``skip_submaps`` latest) with a scan within ``radius_m`` of the pose
-        ``current``: at most ``loop_matches_per_scan`` of them, those tried longest ago (never first),
-        then the nearest."""
+        ``current``: at most ``budget`` of them, never tried ones first, then those whose matchers are kept,
+        each group the one tried longest ago first, then the nearest."""
+        older = self.submaps[:max(0, len(self.submaps) - 1 - self.cfg.skip_submaps)]
+        if not older or budget <= 0:
+            return []
+        keys = [m for s in older for m in s.keys]
+        starts = np.cumsum([0] + [len(s.keys) for s in older[:-1]])
+        distance = np.linalg.norm(np.array([estimates[m][:2] for m in keys]) - current[:2], axis=1)
+        nearest = np.minimum.reduceat(distance, starts)  # each submap's scan nearest the pose
         near = []
-        for s in self.submaps[:max(0, len(self.submaps) - 1 - self.cfg.skip_submaps)]:
-            members = np.array([estimates[m][:2] for m in s.keys])
-            distance = float(np.min(np.linalg.norm(members - current[:2], axis=1)))
-            if distance <= self.cfg.radius_m:
-                near.append((self.tried.get(s.anchor, -1), distance, s.anchor, s))
-        near.sort(key=lambda c: c[:3])
-        return [c[3] for c in near[:self.cfg.loop_matches_per_scan]]
+        for s, d in zip(older, nearest):
+            if d <= self.cfg.radius_m:
+                tried = self.tried.get(s.anchor, -1)
+                near.append((tried >= 0 and s.anchor not in self.matchers, tried, float(d), s.anchor, s))
+        near.sort(key=lambda c: c[:4])
+        return [c[4] for c in near[:budget]]
 
     def _match(self, matcher: BranchAndBound, points: ScanPoints, predicted: np.ndarray, drift: np.ndarray,
                anchor: int, key: int) -> LoopClosure | None:
@@ -203,8 +210,7 @@ class LoopCloser:
 
     def _local_fit(self, grid: LikelihoodGrid, points: ScanPoints, start: np.ndarray):
         f, step = self.front_cfg, np.radians(self.front_cfg.angle_step_deg)
-        local = correlative_match(grid, points.xy, points.normals, start, 2 * f.window_m, np.radians(2 * f.window_deg),
-                                  step)
+        local = correlative_match(grid, points.xy, points.normals, start, f.window_m, np.radians(f.window_deg), step)
         return local, refine_pose(grid, points.xy, points.normals, local.pose, grid.resolution, step)
 
     def whole_map(self, keys: list[int], estimates: dict[int, np.ndarray]) -> tuple[LikelihoodGrid, np.ndarray]:
