@@ -63,7 +63,7 @@ class FrontEndConfig(_Section):
     nearby_scans: int = Field(20, ge=0)
     nearby_radius_m: float = Field(3.0, ge=0)
     # the response surface (covariance, Olson 2009 §IV) and the final search: ±window around the
-    # winner of the wide search (the loop closer's too: its branch and bound ends on the same lattice)
+    # winner of the wide search (loop closures use twice this window: their winner is coarser)
     window_m: float = Field(0.15, gt=0)
     window_deg: float = Field(3.0, gt=0)
     angle_step_deg: float = Field(0.5, gt=0)

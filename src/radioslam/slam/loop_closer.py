@@ -133,7 +133,7 @@ class LoopCloser:
         """Verified loop closures of scan k against at most ``budget`` older submaps near its pose;
         ``drift(anchor, k, distance)`` is the covariance the odometry accumulated between the two poses."""
         current = estimates[k]
-        margin = max(self.front_cfg.window_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
+        margin = max(2 * self.front_cfg.window_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
         found = []
         for s in self._candidates(current, estimates, budget):
             self.tried[s.anchor] = k
@@ -210,7 +210,8 @@ class LoopCloser:
 
     def _local_fit(self, grid: LikelihoodGrid, points: ScanPoints, start: np.ndarray):
         f, step = self.front_cfg, np.radians(self.front_cfg.angle_step_deg)
-        local = correlative_match(grid, points.xy, points.normals, start, f.window_m, np.radians(f.window_deg), step)
+        local = correlative_match(grid, points.xy, points.normals, start, 2 * f.window_m, np.radians(2 * f.window_deg),
+                                  step)
         return local, refine_pose(grid, points.xy, points.normals, local.pose, grid.resolution, step)
 
     def whole_map(self, keys: list[int], estimates: dict[int, np.ndarray]) -> tuple[LikelihoodGrid, np.ndarray]:
