@@ -435,6 +435,33 @@ def test_the_back_end_solves_incrementally_and_the_batch_solve_decides_only_a_do
     assert np.abs(np.array([spoiled.estimates[k] - without.estimates[k] for k in range(n)])).max() < 1e-3
 
 
+def test_the_odometry_drift_between_two_poses_is_the_sum_of_the_steps_between_them():
+    """The loop gate's drift (running sums of the step covariances, O(1) a loop) equals the step
+    covariances from the anchor's successor to the scan summed, with the heading's variance spreading
+    the position by the distance, and follows a step the front end did not see (a cut: the jump's)."""
+    from radioslam.slam.back_end import BackEnd
+    from radioslam.slam.front_end import Step
+
+    rng = np.random.default_rng(5)
+    back_end = BackEnd.from_config(SlamConfig())
+    for k in range(12):
+        a = rng.normal(size=(3, 3))
+        back_end.add(k, Step(np.array([0.5 * k, 0.0, 0.1 * k]), a @ a.T + np.eye(3), ScanStatus.MATCHED))
+
+    def summed(anchor: int, key: int) -> np.ndarray:
+        return sum(back_end.step_covariance[m] for m in range(anchor + 1, key + 1))
+
+    for anchor, key, distance in ((0, 11, 3.0), (4, 7, 1.5), (10, 11, 0.0)):
+        total = summed(anchor, key)
+        expected = total + np.diag([total[2, 2] * distance**2] * 2 + [0.0])
+        assert np.allclose(back_end.drift(anchor, key, distance), expected, rtol=1e-12, atol=1e-12)
+    back_end.cut(6)
+    assert np.allclose(back_end.step_covariance[6], back_end.jump_covariance)
+    assert np.allclose(back_end.drift(2, 9, 0.0), summed(2, 9), rtol=1e-12, atol=1e-12)
+    back_end.add(12, Step(np.array([6.0, 0.0, 1.2]), np.eye(3), ScanStatus.MATCHED))
+    assert np.allclose(back_end.drift(5, 12, 0.0), summed(5, 12), rtol=1e-12, atol=1e-12)
+
+
 def test_a_submaps_matcher_is_kept_while_its_scans_stay_put_relative_to_its_first():
     """Cartographer keeps a finished submap's grid: a new pose-graph solution that carries the whole
     submap rigidly, or moves its scans less than half a cell against its first one, keeps the matcher
