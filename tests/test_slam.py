@@ -512,7 +512,7 @@ def test_loop_search_matches_a_few_submaps_a_scan_those_tried_longest_ago_first(
     at most ``loop_matches_per_scan`` of them (a flat cost per scan), those never tried first, then those
     whose matchers are kept, then the others, each group those tried longest ago first, then the nearest:
     consecutive scans tie in every lap's submaps in turn, and a dropped matcher is built again only when
-    nothing kept is near. A scan just after one that closed a loop matches ``tied_matches_per_scan``."""
+    nothing kept is near. Scans just after one that closed a loop search only every ``tied_search_every``."""
     from radioslam.slam.loop_closer import LoopCloser
     from radioslam.slam.scan_points import ScanPoints
 
@@ -545,5 +545,7 @@ def test_loop_search_matches_a_few_submaps_a_scan_those_tried_longest_ago_first(
     assert closer._candidates(here, estimates, 0) == []
     far = np.array([20.0, 0.0, 0.0])
     assert closer._candidates(far, estimates, budget) == []
-    assert closer.budget(200, None) == closer.budget(200, 200 - lc.tied_within_scans - 1) == budget
-    assert closer.budget(200, 200 - lc.tied_within_scans) == lc.tied_matches_per_scan == 1
+    every = lc.tied_search_every
+    assert closer.budget(3 * every + 1, None) == closer.budget(3 * every + 1, 2 * every) == budget  # not tied
+    assert closer.budget(3 * every + 1, 3 * every) == 0  # tied: only every tied_search_every-th scan searches
+    assert closer.budget(3 * every, 3 * every - 1) == budget

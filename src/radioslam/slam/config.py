@@ -136,12 +136,10 @@ class LoopClosureConfig(_Section):
     # keeps every lap's submaps tied in, deterministically, and a submap whose matcher was dropped is built
     # again only when no kept or new one is near)
     loop_matches_per_scan: int = Field(3, ge=1)
-    # a scan within ``tied_within_scans`` of the last one that closed a loop (the walk tied to the map)
-    # matches at most ``tied_matches_per_scan`` submaps: the search budget spread evenly over the scans
-    # (Cartographer samples its constraint searches, a ratio of 0.3); a walk not tied matches
-    # ``loop_matches_per_scan`` at every scan
-    tied_within_scans: int = Field(3, ge=0)
-    tied_matches_per_scan: int = Field(1, ge=0)
+    # a scan within this many scans of the last one that closed a loop (the walk tied to the map) searches
+    # only every this many scans (Cartographer samples its constraint searches, a ratio of 0.3); a walk not
+    # tied searches at every scan. 1: every scan searches
+    tied_search_every: int = Field(3, ge=1)
     skip_submaps: int = Field(2, ge=0)  # never the most recent ones
     # a submap's matcher (its grid and branch-and-bound pyramid, in its first scan's frame) is kept until
     # one of its scans has moved this much relative to that first scan since it was built (Cartographer

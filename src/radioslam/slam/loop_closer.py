@@ -123,10 +123,12 @@ class LoopCloser:
         return shift > self.cfg.submap_rebuild_m or turn > np.radians(self.cfg.submap_rebuild_deg)
 
     def budget(self, k: int, last_tied: int | None) -> int:
-        """How many submaps scan k matches: ``tied_matches_per_scan`` when a scan of the last
-        ``tied_within_scans`` closed a loop (``last_tied``: the latest that did), else ``loop_matches_per_scan``."""
-        tied = last_tied is not None and k - last_tied <= self.cfg.tied_within_scans
-        return self.cfg.tied_matches_per_scan if tied else self.cfg.loop_matches_per_scan
+        """How many submaps scan k matches: ``loop_matches_per_scan``, but while a scan of the last
+        ``tied_search_every`` closed a loop (``last_tied``: the latest that did) only every
+        ``tied_search_every``-th scan searches (the others match none)."""
+        every = self.cfg.tied_search_every
+        tied = last_tied is not None and k - last_tied <= every
+        return self.cfg.loop_matches_per_scan if not tied or k % every == 0 else 0
 
     def close(self, k: int, estimates: dict[int, np.ndarray],
               drift: Callable[[int, int, float], np.ndarray], budget: int) -> list[LoopClosure]:
