@@ -119,7 +119,7 @@ class SlamSession:
         if step.status is not ScanStatus.SKIPPED:
             loop_closer.add(k, points)
             self.map.add(k, scan.xy, loop_closer.submaps[-1].anchor, back_end.estimates)
-        # 7. loop closures against older submaps near the pose (fewer per scan while the walk is tied to the map)
+        # 7. loop closures against older submaps near the pose (sampled while the walk is tied to the map)
         budget = 0 if step.status in (ScanStatus.SKIPPED, ScanStatus.DEGENERATE, ScanStatus.PREDICTED) else \
             loop_closer.budget(k, back_end.loops[-1].key if back_end.loops else None)
         loops = [self.loop_hook(lc) for lc in loop_closer.close(k, back_end.estimates, back_end.drift, budget)]
