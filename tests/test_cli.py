@@ -50,11 +50,15 @@ def test_simulate_writes_the_run_directory(tmp_path):
     assert again.returncode == 0
     first, second = run_dir / "captures/0000.sigmf-data", tmp_path / "run2/captures/0000.sigmf-data"
     assert first.read_bytes() == second.read_bytes()
-    # a rerun into the same directory drops the recordings of the earlier run
+    # a rerun into the same directory removes the earlier run's recordings (run.json lists them) and
+    # nothing else: a file run.json does not list is never removed, and a stage refuses to read it
     (run_dir / "captures/0007.sigmf-meta").write_text("{}")
     (run_dir / "captures/notes.txt").write_text("mine")
     assert run("simulate", "single-plate:3.2", "--out", str(run_dir)).returncode == 0
-    assert sorted(p.name for p in (run_dir / "captures").iterdir()) == ["notes.txt"]
+    assert sorted(p.name for p in (run_dir / "captures").iterdir()) == ["0007.sigmf-meta", "notes.txt"]
+    refused = run("sense", str(run_dir))
+    assert refused.returncode == 2 and refused.stderr.count("\n") == 1
+    assert "captures/0007.sigmf-meta: (file): not part of this run" in refused.stderr
 
 
 SCENE = """version: 1

@@ -128,10 +128,13 @@ def test_sense_without_calibration_says_to_calibrate(run_dir, tmp_path):
 
 
 def _copy_run(run_dir, tmp_path):
+    """The run's files as a recorder would leave them: no run.json (a run of ours refuses a damaged file as
+    changed since it was written, before any reader sees it; these tests are about the readers)."""
     import shutil
 
     d = tmp_path / "copy"
     shutil.copytree(run_dir, d)
+    (d / "run.json").unlink()
     return d
 
 

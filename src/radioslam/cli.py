@@ -58,6 +58,13 @@ def one_line_errors(command: Callable) -> Callable:
     return wrapper
 
 
+def out_path(value: str) -> Path:
+    """An --out path: an empty one would be the working directory, so it is refused."""
+    if not str(value).strip():
+        raise typer.BadParameter("an empty path: name the directory or file to write")
+    return Path(value)
+
+
 def progress() -> Progress:
     """A progress bar on stderr, shown only on a terminal."""
     return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
@@ -74,29 +81,34 @@ def scenes() -> None:
         typer.echo(f"{name:14s} {summary}")
 
 
+FORCE_HELP = ("write into a directory that holds other files and no run.json (none of them is removed; "
+              "same-named ones are overwritten)")
+
+
 @app.command()
 @one_line_errors
 def simulate(
     scene: str = typer.Argument(..., help="scene YAML file or built-in name (see 'radioslam scenes')"),
-    out: Path = typer.Option(..., "--out", help="run directory to write"),
+    out: Path = typer.Option(..., "--out", parser=out_path, help="run directory to write"),
     seed: int = typer.Option(0, "--seed", min=0, help="seed of every random draw (≥ 0)"),
     snr_db: Optional[float] = typer.Option(None, "--snr-db", help="per-RE SNR of the reference echo, dB"),
     save_iq: bool = typer.Option(False, "--save-iq", help="write SigMF captures/NNNN.sigmf-{meta,data}"),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ) -> None:
-    """Simulate a scene: scene.yaml, ground_truth.tum, calibration.json and, with --save-iq, SigMF captures."""
+    """Simulate a scene: scene.yaml, ground_truth.tum, calibration.json and, with --save-iq, SigMF captures
+    (a new run: whatever run the directory held is replaced)."""
     from radioslam.io import write_capture
-    from radioslam.pipeline import prepare_run
+    from radioslam.pipeline import simulate_stage
     from radioslam.sim import Simulator
 
-    loaded, run, _ = prepare_run(scene, out, seed, snr_db)
-    run.clear_captures()  # a run directory never mixes recordings of two runs
-    if save_iq:
-        sim = Simulator.from_scene(loaded)
+    def captures(loaded, run) -> None:
         with progress() as bar:
             task = bar.add_task("simulating", total=len(loaded.poses))
-            for capture in sim.simulate(seed):
+            for capture in Simulator.from_scene(loaded).simulate(seed):
                 write_capture(capture, run.capture_base(capture.pose_index))
                 bar.advance(task)
+
+    loaded, run, _ = simulate_stage(scene, out, seed, snr_db, force, captures if save_iq else None)
     err.print(f"wrote {run.root} ({len(loaded.poses)} poses{', IQ captures' if save_iq else ''})",
               markup=False)
 
@@ -105,7 +117,7 @@ def simulate(
 @one_line_errors
 def calibrate(
     scene: Optional[str] = typer.Argument(None, help="scene whose radio to use (default: the paper's defaults)"),
-    out: Path = typer.Option(..., "--out", help="calibration JSON to write"),
+    out: Path = typer.Option(..., "--out", parser=out_path, help="calibration JSON to write"),
     targets: Optional[int] = typer.Option(None, "--targets", min=1, help="number of targets N_T (default 16)"),
     spacing: Optional[float] = typer.Option(None, "--spacing", min=0.05, help="target spacing, m (default 0.8)"),
     captures: Optional[Path] = typer.Option(None, "--captures", help="directory of recorded target captures"),
@@ -187,7 +199,9 @@ def sense(
     """Turn SigMF captures into point clouds: DIR/scans/NNNN.ply."""
     from radioslam.errors import RadioslamError
     from radioslam.io import read_calibration, read_capture, write_scan
+    from radioslam.io.manifest import RunManifest
     from radioslam.io.rundir import RunDir
+    from radioslam.pipeline import sensing_settings
     from radioslam.sensing import Detector, PointFilter, Receiver, Refinement
 
     run = RunDir(run_dir)
@@ -206,7 +220,8 @@ def sense(
     cfg = _sensing_config(config).model_copy(update=given)
     files = _capture_files(run.captures)
     receiver = None
-    with progress() as bar:
+    with RunManifest(run.root).stage("sense", sensing_settings(cfg, cal, calibration or run.calibration)), \
+            progress() as bar:
         task = bar.add_task("sensing", total=len(files))
         for f in files:
             capture = read_capture(f)
@@ -287,7 +302,8 @@ def slam(
 @one_line_errors
 def sweep(
     sweep_file: Path = typer.Argument(..., help="sweep YAML: scenes, seeds, snr_db, overrides, variants, robustness"),
-    out: Path = typer.Option(..., "--out", help="sweep directory: runs/, rows/, results.parquet, results.csv, plots"),
+    out: Path = typer.Option(..., "--out", parser=out_path,
+                             help="sweep directory: runs/, rows/, results.parquet, results.csv, plots"),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="a running Dask scheduler (tcp://HOST:8786; "
                                             "its workers must see --out), or 'synchronous' (one by one, in this "
                                             "process); default: a LocalCluster"),
@@ -341,18 +357,17 @@ def evaluate(
 
 
 def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out: bool, config: Optional[Path] = None,
-             odometry: Optional[Path] = None, strict: bool = False) -> None:
-    from radioslam.pipeline import run_scene
+             odometry: Optional[Path] = None, strict: bool = False, force: bool = False) -> None:
+    from radioslam.pipeline import report_stage, run_scene
     from radioslam.scene import load_scene
-    from radioslam.viz.report import write_report
 
     cfg = _slam_config(config)
     poses = len(load_scene(scene).poses)
     with progress() as bar:
         task = bar.add_task("simulating and sensing", total=poses)
         result, metrics = run_scene(scene, out, seed, snr_db, lambda: bar.advance(task), cfg, odometry,
-                                    _sensing_config(config))
-    write_report(out)
+                                    _sensing_config(config), force)
+    report_stage(out)
     _print_metrics(metrics, json_out)
     err.print(f"wrote {out} (report.html)", markup=False)
     _report_slam(result, strict)
@@ -362,7 +377,7 @@ def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out
 @one_line_errors
 def run(
     scene: str = typer.Argument(..., help="scene YAML file or built-in name"),
-    out: Path = typer.Option(..., "--out", help="run directory to write"),
+    out: Path = typer.Option(..., "--out", parser=out_path, help="run directory to write"),
     seed: int = typer.Option(0, "--seed", min=0),
     snr_db: Optional[float] = typer.Option(None, "--snr-db", help="per-RE SNR of the reference echo, dB"),
     json_out: bool = typer.Option(False, "--json", help="print one JSON object of the metrics on stdout"),
@@ -370,28 +385,32 @@ def run(
     odometry: Optional[Path] = typer.Option(None, "--odometry",
                                             help=ODOMETRY_HELP + "; 'simulated': the scene's own (odometry.tum)"),
     strict: bool = typer.Option(False, "--strict", help=STRICT_HELP),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ) -> None:
-    """simulate → sense → slam → evaluate on any scene, and write report.html."""
-    _run_all(scene, out, seed, snr_db, json_out, config, odometry, strict)
+    """simulate → sense → slam → evaluate on any scene, and write report.html (a new run: whatever run the
+    directory held is replaced)."""
+    _run_all(scene, out, seed, snr_db, json_out, config, odometry, strict, force)
 
 
 @app.command()
 @one_line_errors
 def demo(
-    out: Path = typer.Option(Path("runs/demo"), "--out", help="run directory to write"),
+    out: Path = typer.Option(Path("runs/demo"), "--out", parser=out_path, help="run directory to write"),
     seed: int = typer.Option(1, "--seed", min=0),
     json_out: bool = typer.Option(False, "--json", help="print one JSON object of the metrics on stdout"),
     strict: bool = typer.Option(False, "--strict", help=STRICT_HELP),
+    force: bool = typer.Option(False, "--force", help=FORCE_HELP),
 ) -> None:
     """The paper's Fig. 6 simulation end to end: paper-cnv, 60 poses, SNR 10 dB, waveform IQ."""
-    _run_all("paper-cnv", out, seed, None, json_out, strict=strict)
+    _run_all("paper-cnv", out, seed, None, json_out, strict=strict, force=force)
 
 
 @app.command()
 @one_line_errors
 def reproduce(
     experiment: str = typer.Argument(..., help="table1, fig5, fig8, fig6 or all"),
-    out: Path = typer.Option(..., "--out", help="directory for the figure (PNG) and table (CSV, Markdown)"),
+    out: Path = typer.Option(..., "--out", parser=out_path,
+                             help="directory for the figure (PNG) and table (CSV, Markdown)"),
     json_out: bool = typer.Option(False, "--json", help="print one JSON object of the results on stdout"),
     seed: int = typer.Option(0, "--seed", min=0),
     trials: Optional[int] = typer.Option(None, "--trials", min=1, help="Monte Carlo trials (default per experiment)"),

@@ -20,6 +20,7 @@ from pathlib import Path
 from radioslam.capture import Capture
 from radioslam.errors import RadioslamError
 from radioslam.io import read_calibration, read_capture, read_scan, write_scan
+from radioslam.io.manifest import RunManifest
 from radioslam.io.rundir import RunDir
 from radioslam.io.sigmf_io import data_path, meta_path
 from radioslam.pipeline import write_slam_outputs
@@ -92,9 +93,14 @@ def follow_stage(out: Path, cfg: SlamConfig | None = None, idle_s: float = 60.0,
                  sensing: SensingConfig | None = None) -> SlamResult:
     """SLAM on the scans of ``out`` (or its recordings, sensed with ``sensing``) as they appear; each
     scan's pose to ``on_update`` at once; when the walk ends, the outputs of the slam stage."""
-    run, cfg = RunDir(out), cfg or SlamConfig()
+    run, cfg, manifest = RunDir(out), cfg or SlamConfig(), RunManifest(out)
     feed, session, scans = ScanFeed(run, idle_s, RecordingSensor(run, sensing)), SlamSession(cfg), []
     tick = time.perf_counter()
+    # a run of ours: this walk's scans replace its sense stage (and what followed it); a recorder's
+    # directory without run.json is adopted when the walk ends (its scans, as found)
+    sensing_here = manifest.load() is not None
+    if sensing_here:
+        manifest.begin("sense", {"follow": True, "sensing": (sensing or SensingConfig()).model_dump(mode="json")})
     try:
         while (scan := feed.next(len(scans))) is not None:
             scans.append(scan)
@@ -103,11 +109,18 @@ def follow_stage(out: Path, cfg: SlamConfig | None = None, idle_s: float = 60.0,
                 on_update(update)
     except KeyboardInterrupt:  # the user ends the walk: what came so far is mapped
         pass
+    except BaseException as exc:
+        if sensing_here:
+            manifest.fail("sense", f"{type(exc).__name__}: {exc}")
+        raise
+    if sensing_here:
+        manifest.complete("sense")
     if not scans:
         raise RadioslamError(f"no scan (0000.ply) appeared within {idle_s:g} s", file=run.scans, field="(directory)")
     try:
         result = session.finish()
     except RadioslamError as exc:
         raise RadioslamError(exc.reason, file=exc.file or run.scans, field=exc.field) from None
-    write_slam_outputs(run, scans, result, cfg, {"slam": time.perf_counter() - tick, "follow_idle_s": idle_s})
+    with manifest.stage("slam", {"slam": cfg.model_dump(mode="json"), "follow": True}):
+        write_slam_outputs(run, scans, result, cfg, {"slam": time.perf_counter() - tick, "follow_idle_s": idle_s})
     return result

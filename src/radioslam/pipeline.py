@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import re
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -19,10 +20,11 @@ from radioslam.eval.ranging import beam_half_width_rad, robust_rmse, specular_ra
 from radioslam.eval.trajectory_metrics import align, ate_rmse, rpe_rmse
 from radioslam.io import read_scan, read_tum, write_calibration, write_scan, write_tum
 from radioslam.io.atomic import atomic_write_text
+from radioslam.io.manifest import RunManifest
 from radioslam.io.ply import read_map_points
 from radioslam.io.ros_map import FREE, OCCUPIED, UNKNOWN, read_ros_map, write_ros_map
 from radioslam.io.rundir import RunDir
-from radioslam.scene import load_scene, scene_to_yaml
+from radioslam.scene import Scene, load_scene, scene_to_yaml
 from radioslam.sensing import Receiver, SensingConfig, estimate_hardware_delay
 from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import Simulator
@@ -60,42 +62,55 @@ def write_json(path: Path, doc: dict) -> None:
     atomic_write_text(path, json.dumps(doc, indent=2) + "\n")
 
 
-def prepare_run(scene_name: str, out: Path, seed: int, snr_db: float | None):
-    """scene.yaml, ground_truth.tum and calibration.json (eq. (11) on plates simulated with this
-    scene's radio): the scene, the run directory and the calibration."""
+def simulate_stage(scene_name: str, out: Path, seed: int, snr_db: float | None, force: bool = False,
+                   captures: Callable[[Scene, RunDir], None] | None = None):
+    """A new run in ``out`` (the old one there replaced whole, run.json): scene.yaml, ground_truth.tum and
+    calibration.json (eq. (11) on plates simulated with this scene's radio), and what ``captures`` writes;
+    the scene, the run directory and the calibration."""
     scene = load_scene(scene_name).with_radio(snr_db=snr_db)
-    run = RunDir(out)
-    run.root.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(run.scene, scene_to_yaml(scene))
-    write_tum(run.ground_truth, run.pose_timestamps(len(scene.poses)), scene.poses)
-    if scene.spec.odometry is not None:  # a drifting wheel/IMU odometry of the same walk
-        write_tum(run.odometry, run.pose_timestamps(len(scene.poses)),
-                  simulated_odometry(scene.poses, scene.spec.odometry, odometry_rng(seed)))
-    elif run.odometry.exists():
-        run.odometry.unlink()  # a run directory never mixes two runs
-    return scene, run, calibrate_simulated(scene.radio, run.calibration, seed)
+    run, manifest = RunDir(out), RunManifest(out)
+    manifest.new_run(seed, scene_name, force)
+    settings = {"scene": scene_name, "seed": seed, "snr_db": snr_db, "save_iq": captures is not None,
+                "radio": scene.radio.model_dump(mode="json")}
+    with manifest.stage("simulate", settings):
+        atomic_write_text(run.scene, scene_to_yaml(scene))
+        write_tum(run.ground_truth, run.pose_timestamps(len(scene.poses)), scene.poses)
+        if scene.spec.odometry is not None:  # a drifting wheel/IMU odometry of the same walk
+            write_tum(run.odometry, run.pose_timestamps(len(scene.poses)),
+                      simulated_odometry(scene.poses, scene.spec.odometry, odometry_rng(seed)))
+        cal = calibrate_simulated(scene.radio, run.calibration, seed)
+        if captures is not None:
+            captures(scene, run)
+    return scene, run, cal
+
+
+def sensing_settings(sensing: SensingConfig | None, cal, calibration: Path) -> dict:
+    """What run.json records of a sense stage: the receiver's settings and the calibration it used."""
+    return {"sensing": (sensing or SensingConfig()).model_dump(mode="json"), "calibration": str(calibration),
+            "hardware_delay_s": cal.hardware_delay_s}
 
 
 def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None,
-                       sensing: SensingConfig | None = None) -> dict:
-    """The files of :func:`prepare_run` and scans/ (IQ sensed in memory, by a receiver set by
+                       sensing: SensingConfig | None = None, force: bool = False) -> dict:
+    """The files of :func:`simulate_stage` and scans/ (IQ sensed in memory, by a receiver set by
     ``sensing``); stage seconds."""
     timings = {}
     tick = time.perf_counter()
-    scene, run, cal = prepare_run(scene_name, out, seed, snr_db)
+    scene, run, cal = simulate_stage(scene_name, out, seed, snr_db, force)
     timings["calibrate"] = time.perf_counter() - tick
     receiver = Receiver(scene.radio, cal.hardware_delay_s, sensing, cal.leakage)
     simulate_s = sense_s = 0.0
     captures = Simulator.from_scene(scene).simulate(seed)
-    for index in range(len(scene.poses)):
-        tick = time.perf_counter()
-        capture = next(captures)
-        simulate_s += time.perf_counter() - tick
-        tick = time.perf_counter()
-        write_scan(run.scan_file(capture.pose_index), receiver.sense(capture).scan, comment=f"pose {index}")
-        sense_s += time.perf_counter() - tick
-        if advance:
-            advance()
+    with RunManifest(out).stage("sense", sensing_settings(sensing, cal, run.calibration)):
+        for index in range(len(scene.poses)):
+            tick = time.perf_counter()
+            capture = next(captures)
+            simulate_s += time.perf_counter() - tick
+            tick = time.perf_counter()
+            write_scan(run.scan_file(capture.pose_index), receiver.sense(capture).scan, comment=f"pose {index}")
+            sense_s += time.perf_counter() - tick
+            if advance:
+                advance()
     timings.update(simulate=simulate_s, sense=sense_s)
     return timings
 
@@ -116,16 +131,18 @@ def read_scans(run: RunDir) -> list[Scan]:
 def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = None,
                odometry: Path | None = None) -> SlamResult:
     """Trajectories, maps and slam.json from scans/ (and an external odometry TUM file, if given)."""
-    run = RunDir(out)
-    scans = read_scans(run)
-    cfg = cfg or SlamConfig()
-    odometry_poses = read_odometry(odometry, len(scans)) if odometry is not None else None
-    tick = time.perf_counter()
-    try:
-        result = RadioSlam(cfg).run(scans, odometry_poses)
-    except RadioslamError as exc:  # the driver knows the field and reason, this stage the files
-        raise RadioslamError(exc.reason, file=exc.file or run.scans, field=exc.field) from None
-    write_slam_outputs(run, scans, result, cfg, {**(timings or {}), "slam": time.perf_counter() - tick}, odometry)
+    run, cfg = RunDir(out), cfg or SlamConfig()
+    settings = {"slam": cfg.model_dump(mode="json"), "odometry": None if odometry is None else str(odometry)}
+    with RunManifest(out).stage("slam", settings):
+        scans = read_scans(run)
+        odometry_poses = read_odometry(odometry, len(scans)) if odometry is not None else None
+        tick = time.perf_counter()
+        try:
+            result = RadioSlam(cfg).run(scans, odometry_poses)
+        except RadioslamError as exc:  # the driver knows the field and reason, this stage the files
+            raise RadioslamError(exc.reason, file=exc.file or run.scans, field=exc.field) from None
+        write_slam_outputs(run, scans, result, cfg, {**(timings or {}), "slam": time.perf_counter() - tick},
+                           odometry)
     return result
 
 
@@ -177,13 +194,13 @@ def read_odometry(path: Path, scans: int) -> np.ndarray:
 
 def run_scene(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None,
               cfg: SlamConfig | None = None, odometry: Path | None = None,
-              sensing: SensingConfig | None = None) -> tuple[SlamResult, dict]:
+              sensing: SensingConfig | None = None, force: bool = False) -> tuple[SlamResult, dict]:
     """Simulate and sense, SLAM, evaluate: a whole run directory; the SLAM result and metrics."""
     simulated = odometry is not None and str(odometry) == SIMULATED_ODOMETRY
     if simulated and load_scene(scene_name).spec.odometry is None:
         raise RadioslamError("the scene has no odometry: block to simulate one from", file=scene_name,
                              field="odometry")
-    timings = simulate_and_sense(scene_name, out, seed, snr_db, advance, sensing)
+    timings = simulate_and_sense(scene_name, out, seed, snr_db, advance, sensing, force)
     result = slam_stage(out, cfg, timings, RunDir(out).odometry if simulated else odometry)
     return result, evaluate_stage(out)
 
@@ -213,7 +230,19 @@ def _ranging_errors(run: RunDir, scene, truth: np.ndarray) -> np.ndarray:
 
 def evaluate_stage(out: Path) -> dict:
     """metrics.json (DESIGN.md §6 ★ keys) against the scene's ground truth."""
-    run = RunDir(out)
+    with RunManifest(out).stage("evaluate"):
+        return _evaluate(RunDir(out))
+
+
+def report_stage(out: Path) -> Path:
+    """report.html and its figures."""
+    from radioslam.viz.report import write_report
+
+    with RunManifest(out).stage("report"):
+        return write_report(out)
+
+
+def _evaluate(run: RunDir) -> dict:
     tick = time.perf_counter()
     _, truth = read_tum(run.ground_truth)
     _, estimate = read_tum(run.trajectory)

@@ -1,4 +1,5 @@
-"""Write-then-rename, so a file that exists is always complete."""
+"""Write-then-rename, so a file that exists is always complete: the file and its directory are synced
+before and after the rename, so a power cut leaves the old file or the new one, never an empty one."""
 
 from __future__ import annotations
 
@@ -21,10 +22,26 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
+        _sync(tmp)
         os.replace(tmp, path)
+        _sync(path.parent)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def _sync(path: str | Path) -> None:
+    """fsync a file or a directory (where the platform lets a directory be opened)."""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
 
 
 def atomic_write_text(path: str | Path, text: str) -> None:

@@ -21,3 +21,7 @@ class CalibrationFileError(RadioslamError):
 
 class RosMapError(RadioslamError):
     """A map_server map (YAML + PGM) that is missing or malformed."""
+
+
+class ManifestError(RadioslamError):
+    """A run directory whose run.json is malformed, or whose files do not belong to one complete run."""

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,13 +23,6 @@ class RunDir:
     @property
     def captures(self) -> Path:
         return self.root / "captures"
-
-    def clear_captures(self) -> None:
-        """Remove the recordings of an earlier run (``captures/NNNN.sigmf-{meta,data}`` only)."""
-        if self.captures.is_dir():
-            for f in self.captures.iterdir():
-                if re.fullmatch(r"\d{4}\.sigmf-(meta|data)", f.name):
-                    f.unlink()
 
     def capture_base(self, pose_index: int) -> Path:
         """``captures/NNNN`` (add ``.sigmf-meta`` / ``.sigmf-data``)."""

@@ -37,9 +37,10 @@ def flatten(doc: dict, prefix: str = "") -> dict:
     return out
 
 
-def _scene_argument(run: RunSpec, run_dir: Path) -> str:
+def _scene_argument(run: RunSpec, inputs: Path) -> str:
     """What run_scene loads: the name or file as given, or a file of the scene as this run changes it
-    (a generated robustness case, radio overrides)."""
+    (a generated robustness case, radio overrides), ``inputs/<run_id>.yaml`` (beside the run
+    directories: a run directory holds one run's files, run.json lists them)."""
     if run.generated is None and not run.overrides["radio"]:
         return run.scene
     if run.generated is not None:
@@ -50,8 +51,7 @@ def _scene_argument(run: RunSpec, run_dir: Path) -> str:
     else:
         scene = load_scene(run.scene)
     scene = scene.with_radio(**run.overrides["radio"])
-    path = run_dir / "input-scene.yaml"
-    run_dir.mkdir(parents=True, exist_ok=True)
+    path = inputs / f"{run.run_id}.yaml"
     atomic_write_text(path, scene_to_yaml(scene))
     return str(path)
 
@@ -65,7 +65,7 @@ def run_one(run: RunSpec, out: str) -> dict:
     try:
         with threadpool_limits(1), warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            scene = _scene_argument(run, run_dir)
+            scene = _scene_argument(run, Path(out) / "inputs")
             _, metrics = run_scene(scene, run_dir, run.seed, run.snr_db,
                                    cfg=SlamConfig.model_validate(run.overrides["slam"]),
                                    sensing=SensingConfig.model_validate(run.overrides["sensing"]))

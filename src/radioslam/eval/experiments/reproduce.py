@@ -51,12 +51,11 @@ def _fig6(out: Path, seed: int, trials: int | None) -> dict:
     directory kept under fig6-run/ with report.html."""
     import shutil
 
-    from radioslam.pipeline import run_scene
-    from radioslam.viz.report import write_report
+    from radioslam.pipeline import report_stage, run_scene
 
     run = out / "fig6-run"
     _, metrics = run_scene("paper-cnv", run, seed, None)
-    write_report(run)
+    report_stage(run)
     shutil.copyfile(run / "fig6.png", out / "fig6.png")
     write_table(out / "fig6", ["metric", "value"],
                 [[k, v] for k, v in metrics.items() if isinstance(v, (int, float))])
