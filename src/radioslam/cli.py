@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+import signal
 import sys
+import warnings
 from collections.abc import Callable
 from functools import wraps
 from pathlib import Path
@@ -17,7 +19,9 @@ from radioslam.errors import RadioslamError
 
 app = typer.Typer(add_completion=False, invoke_without_command=True, pretty_exceptions_enable=False,
                   rich_markup_mode=None, help="Active mmWave sensing SLAM in 5G NR (arXiv 2507.04662).")
-err = Console(stderr=True, highlight=False)
+# user strings (file names, reasons) are never markup or emoji codes (':radio:'), and a line never wraps
+err = Console(stderr=True, highlight=False, emoji=False, markup=False, soft_wrap=True)
+TERMINATED = 143  # 128 + SIGTERM, as a shell reports it
 
 
 def _version(value: bool) -> None:
@@ -38,6 +42,14 @@ def _root(ctx: typer.Context,
         raise typer.Exit()
 
 
+class Interrupted(BaseException):
+    """Ctrl-C during a command (its temporary files are gone and its stage marked failed on the way out)."""
+
+
+class Terminated(BaseException):
+    """SIGTERM, raised where the process is, so that the way out is the same as after Ctrl-C."""
+
+
 def _fail(message: str) -> None:
     err.print(f"radioslam: error: {message}", markup=False, soft_wrap=True)
     raise typer.Exit(2)
@@ -54,6 +66,8 @@ def one_line_errors(command: Callable) -> Callable:
             _fail(exc.one_line())
         except OSError as exc:
             _fail(f"{exc.filename or '(file)'}: (file): {exc.strerror or exc}")
+        except KeyboardInterrupt:  # not click's: it would print a blank line first
+            raise Interrupted() from None
 
     return wrapper
 
@@ -81,6 +95,8 @@ def scenes() -> None:
         typer.echo(f"{name:14s} {summary}")
 
 
+MAX_MEMORY_HELP = ("GiB one pose may need (estimated before anything is allocated; default: half the machine's "
+                   "memory); beyond it, exit 2 naming the field")
 FORCE_HELP = ("write into a directory that holds other files and no run.json (none of them is removed; "
               "same-named ones are overwritten)")
 
@@ -94,6 +110,7 @@ def simulate(
     snr_db: Optional[float] = typer.Option(None, "--snr-db", help="per-RE SNR of the reference echo, dB"),
     save_iq: bool = typer.Option(False, "--save-iq", help="write SigMF captures/NNNN.sigmf-{meta,data}"),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
+    max_memory: Optional[float] = typer.Option(None, "--max-memory", min=0.01, help=MAX_MEMORY_HELP),
 ) -> None:
     """Simulate a scene: scene.yaml, ground_truth.tum, calibration.json and, with --save-iq, SigMF captures
     (a new run: whatever run the directory held is replaced)."""
@@ -108,7 +125,8 @@ def simulate(
                 write_capture(capture, run.capture_base(capture.pose_index))
                 bar.advance(task)
 
-    loaded, run, _ = simulate_stage(scene, out, seed, snr_db, force, captures if save_iq else None)
+    loaded, run, _ = simulate_stage(scene, out, seed, snr_db, force, captures if save_iq else None,
+                                    _gib(max_memory))
     err.print(f"wrote {run.root} ({len(loaded.poses)} poses{', IQ captures' if save_iq else ''})",
               markup=False)
 
@@ -118,7 +136,8 @@ def simulate(
 def calibrate(
     scene: Optional[str] = typer.Argument(None, help="scene whose radio to use (default: the paper's defaults)"),
     out: Path = typer.Option(..., "--out", parser=out_path, help="calibration JSON to write"),
-    targets: Optional[int] = typer.Option(None, "--targets", min=1, help="number of targets N_T (default 16)"),
+    targets: Optional[int] = typer.Option(None, "--targets", min=1, max=256,
+                                           help="number of targets N_T (default 16)"),
     spacing: Optional[float] = typer.Option(None, "--spacing", min=0.05, help="target spacing, m (default 0.8)"),
     captures: Optional[Path] = typer.Option(None, "--captures", help="directory of recorded target captures"),
     ranges: Optional[str] = typer.Option(None, "--ranges", help="their ranges, m, comma separated, in file order"),
@@ -195,6 +214,7 @@ def sense(
     config: Optional[Path] = typer.Option(None, "--config", help="YAML config file; its sensing: section sets "
                                           "the receiver, the options above override it"),
     plot_pose: int = typer.Option(0, "--plot-pose", help="pose whose heatmap and cloud to draw; −1: none"),
+    max_memory: Optional[float] = typer.Option(None, "--max-memory", min=0.01, help=MAX_MEMORY_HELP),
 ) -> None:
     """Turn SigMF captures into point clouds: DIR/scans/NNNN.ply."""
     from radioslam.errors import RadioslamError
@@ -203,6 +223,7 @@ def sense(
     from radioslam.io.rundir import RunDir
     from radioslam.pipeline import sensing_settings
     from radioslam.sensing import Detector, PointFilter, Receiver, Refinement
+    from radioslam.sim.memory import check_budget, default_budget, recording_memory
 
     run = RunDir(run_dir)
     cal = read_calibration(calibration or run.calibration)
@@ -223,8 +244,16 @@ def sense(
     with RunManifest(run.root).stage("sense", sensing_settings(cfg, cal, calibration or run.calibration)), \
             progress() as bar:
         task = bar.add_task("sensing", total=len(files))
+        seen: dict[int, Path] = {}
         for f in files:
+            data = f.with_name(f.name.replace(".sigmf-meta", ".sigmf-data"))
+            if data.is_file():  # what sensing it needs, before reading it
+                check_budget(recording_memory(data.stat().st_size), _gib(max_memory) or default_budget(), str(data))
             capture = read_capture(f)
+            if capture.pose_index in seen:
+                raise RadioslamError(f"pose {capture.pose_index} again (also in {seen[capture.pose_index].name}): "
+                                     "one recording per pose", file=f, field="global.radioslam:pose_index")
+            seen[capture.pose_index] = f
             receiver = receiver or Receiver(capture.radio, cal.hardware_delay_s, cfg, cal.leakage)
             result = receiver.sense(capture)
             write_scan(run.scan_file(capture.pose_index), result.scan, comment=f"pose {capture.pose_index}")
@@ -334,10 +363,10 @@ def _print_update(update) -> None:
 
 
 def _print_metrics(metrics: dict, json_out: bool) -> None:
-    import json
+    from radioslam.io.json_io import dumps
 
     if json_out:
-        typer.echo(json.dumps(metrics))
+        typer.echo(dumps(metrics))
         return
     for key, value in metrics.items():
         shown = f"{value:.4f}" if isinstance(value, float) else value
@@ -356,8 +385,13 @@ def evaluate(
     _print_metrics(evaluate_stage(run_dir), json_out)
 
 
+def _gib(value: Optional[float]) -> Optional[int]:
+    return None if value is None else int(value * 2**30)
+
+
 def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out: bool, config: Optional[Path] = None,
-             odometry: Optional[Path] = None, strict: bool = False, force: bool = False) -> None:
+             odometry: Optional[Path] = None, strict: bool = False, force: bool = False,
+             max_memory: Optional[float] = None) -> None:
     from radioslam.pipeline import report_stage, run_scene
     from radioslam.scene import load_scene
 
@@ -366,7 +400,7 @@ def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out
     with progress() as bar:
         task = bar.add_task("simulating and sensing", total=poses)
         result, metrics = run_scene(scene, out, seed, snr_db, lambda: bar.advance(task), cfg, odometry,
-                                    _sensing_config(config), force)
+                                    _sensing_config(config), force, _gib(max_memory))
     report_stage(out)
     _print_metrics(metrics, json_out)
     err.print(f"wrote {out} (report.html)", markup=False)
@@ -386,10 +420,11 @@ def run(
                                             help=ODOMETRY_HELP + "; 'simulated': the scene's own (odometry.tum)"),
     strict: bool = typer.Option(False, "--strict", help=STRICT_HELP),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
+    max_memory: Optional[float] = typer.Option(None, "--max-memory", min=0.01, help=MAX_MEMORY_HELP),
 ) -> None:
     """simulate → sense → slam → evaluate on any scene, and write report.html (a new run: whatever run the
     directory held is replaced)."""
-    _run_all(scene, out, seed, snr_db, json_out, config, odometry, strict, force)
+    _run_all(scene, out, seed, snr_db, json_out, config, odometry, strict, force, max_memory)
 
 
 @app.command()
@@ -400,9 +435,10 @@ def demo(
     json_out: bool = typer.Option(False, "--json", help="print one JSON object of the metrics on stdout"),
     strict: bool = typer.Option(False, "--strict", help=STRICT_HELP),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
+    max_memory: Optional[float] = typer.Option(None, "--max-memory", min=0.01, help=MAX_MEMORY_HELP),
 ) -> None:
     """The paper's Fig. 6 simulation end to end: paper-cnv, 60 poses, SNR 10 dB, waveform IQ."""
-    _run_all("paper-cnv", out, seed, None, json_out, strict=strict, force=force)
+    _run_all("paper-cnv", out, seed, None, json_out, strict=strict, force=force, max_memory=max_memory)
 
 
 @app.command()
@@ -421,10 +457,9 @@ def reproduce(
 ) -> None:
     """Reproduce the paper's experiments: Table I, Fig. 5, Fig. 8 and Fig. 6 (SLAM on paper-cnv); and
     Table I under hardware impairments (impairments)."""
-    import json
-
     from radioslam.errors import RadioslamError
     from radioslam.eval.experiments.reproduce import EXPERIMENTS, IMPAIRMENT_PROFILES, run_experiment
+    from radioslam.io.json_io import dumps
 
     names = list(EXPERIMENTS) if experiment == "all" else [experiment]
     if any(n not in EXPERIMENTS for n in names):
@@ -436,25 +471,38 @@ def reproduce(
     out.mkdir(parents=True, exist_ok=True)
     results = {n: run_experiment(n, out, seed, trials, impairments) for n in names}
     if json_out:
-        typer.echo(json.dumps(results[names[0]] if len(names) == 1 else results))
+        typer.echo(dumps(results[names[0]] if len(names) == 1 else results))
     err.print(f"wrote {', '.join(names)} to {out}", markup=False)
+
+
+def _terminate(signum, frame) -> None:
+    raise Terminated()
 
 
 def main() -> None:
     """Entry point: usage errors and interrupts end in one line too.
 
     typer ≤ 0.2x raises click's exceptions, newer typer its vendored copy of them;
-    both carry ``format_message()`` and ``exit_code``, which is all this needs.
+    both carry ``format_message()`` and ``exit_code``, which is all this needs. Warnings of the
+    numerical libraries (a log of zero, an empty mean) are counted, not printed line by line.
     """
     command = typer.main.get_command(app)
+    signal.signal(signal.SIGTERM, _terminate)
     try:
-        code = command.main(prog_name="radioslam", standalone_mode=False)
-    except KeyboardInterrupt:
-        err.print("radioslam: interrupted", markup=False)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("default")
+            code = command.main(prog_name="radioslam", standalone_mode=False)
+        if not code:
+            _report_warnings(caught)
+    except Terminated:
+        err.print("radioslam: terminated (SIGTERM); unfinished stages are marked failed in run.json")
+        sys.exit(TERMINATED)
+    except (Interrupted, KeyboardInterrupt):
+        err.print("radioslam: interrupted (Ctrl-C); unfinished stages are marked failed in run.json")
         sys.exit(130)
     except Exception as exc:  # noqa: BLE001 - only click-style exceptions are handled here
         if type(exc).__name__ == "Abort":
-            err.print("radioslam: interrupted", markup=False)
+            err.print("radioslam: interrupted (Ctrl-C)")
             sys.exit(130)
         if not (hasattr(exc, "format_message") and hasattr(exc, "exit_code")):
             raise
@@ -463,6 +511,14 @@ def main() -> None:
         err.print(f"radioslam: error: {where}{exc.format_message()}", markup=False, soft_wrap=True)
         sys.exit(exc.exit_code)
     sys.exit(code if isinstance(code, int) else 0)
+
+
+def _report_warnings(caught: list) -> None:
+    """One line for the warnings a successful command met (none for an error: that is its one line)."""
+    if caught:
+        first = caught[0]
+        err.print(f"radioslam: note: {len(caught)} warning(s) from the numerical libraries, the first: "
+                  f"{first.category.__name__}: {' '.join(str(first.message).split())}")
 
 
 if __name__ == "__main__":

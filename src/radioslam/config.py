@@ -100,33 +100,34 @@ class RadioConfig(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
-    carrier_hz: float = Field(28e9, gt=0)
-    fft_size: int = Field(1024, ge=128)
-    n_subcarriers: int = Field(792, ge=12)
-    subcarrier_spacing_hz: float = Field(120e3, gt=0)
-    array_elements: int = Field(8, ge=2)
+    carrier_hz: float = Field(28e9, gt=0, le=3e11)
+    fft_size: int = Field(1024, ge=128, le=4096)  # NR: at most 4096 (38.211)
+    n_subcarriers: int = Field(792, ge=12, le=3300)  # ≤ 275 resource blocks
+    subcarrier_spacing_hz: float = Field(120e3, gt=0, le=960e3)
+    array_elements: int = Field(8, ge=2, le=256)
     codebook_bits: int = Field(6, ge=2, le=10)
     beams_per_side: int = Field(23, ge=0)  # i = -23..23: 47 beams, ±45.95°
     orientations: int = Field(4, ge=1, le=8)
-    symbols_per_frame: int = Field(6, ge=1)  # sensing symbols per beam per frame
-    frames: int = Field(2, ge=1)  # R = symbols_per_frame * frames = 12
+    symbols_per_frame: int = Field(6, ge=1, le=14)  # sensing symbols per beam per frame
+    frames: int = Field(2, ge=1, le=64)  # R = symbols_per_frame * frames = 12
     pss: PssKind = PssKind.M_SEQUENCE
     n_id2: int = Field(0, ge=0, le=2)
     data: DataMode = DataMode.DIFFERENT
-    snr_db: float = 10.0  # ★ per-RE SNR of the reference echo (DESIGN.md §2)
+    snr_db: float = Field(10.0, ge=-60.0, le=100.0)  # ★ per-RE SNR of the reference echo (DESIGN.md §2)
     hardware_delay_s: float = Field(32e-6, ge=0, le=1e-3)
-    isolation_db: float = 70.0  # TX→RX isolation, mean over the beams: leakage ≈ the 5 m reference echo
+    # TX→RX isolation, mean over the beams: leakage ≈ the 5 m reference echo
+    isolation_db: float = Field(70.0, ge=0.0, le=200.0)
     array_baseline_m: float = Field(0.05, ge=0, le=1.0)  # TX/RX array centre spacing
     # the coupling path's delay beyond b/c (feed lines, a reflection inside the housing): the receiver
     # does not assume it, it measures the leakage's delay per beam at calibration
     leakage_excess_delay_s: float = Field(0.0, ge=-5e-9, le=5e-9)
     leakage_coupling: LeakageCoupling = LeakageCoupling.ARRAYS
-    element_exponent: float = Field(1.0, ge=0)  # element power pattern cos^q(θ)
-    ray_spacing_deg: float = Field(0.25, gt=0, le=2.0)
-    max_range_m: float = Field(40.0, gt=0)
+    element_exponent: float = Field(1.0, ge=0, le=100)  # element power pattern cos^q(θ)
+    ray_spacing_deg: float = Field(0.25, ge=0.01, le=2.0)
+    max_range_m: float = Field(40.0, gt=0, le=1000.0)
     max_hits: int = Field(3, ge=1, le=8)  # ray continues through transmissive walls
-    calibration_targets: int = Field(16, ge=1)
-    calibration_spacing_m: float = Field(0.8, gt=0)
+    calibration_targets: int = Field(16, ge=1, le=256)
+    calibration_spacing_m: float = Field(0.8, gt=0, le=100.0)
     point_threshold_db: float = Field(-13.0, le=0)
     impairments: Impairments = Impairments()
 

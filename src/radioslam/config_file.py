@@ -14,18 +14,57 @@ from pydantic import BaseModel, ValidationError
 from radioslam.errors import RadioslamError
 
 Model = TypeVar("Model", bound=BaseModel)
+MAX_BYTES = 16 * 2**20  # a scene, config or sweep file is text of a few kB
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """PyYAML's safe loader refusing a key repeated in one mapping (it would keep the last one silently)."""
+
+    def construct_mapping(self, node, deep=False):
+        seen = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(None, None, f"the key {key!r} appears twice in one mapping",
+                                                        key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep)
+
+
+def read_yaml(path: str | Path, error: type[RadioslamError]) -> object:
+    """The YAML document in the regular file ``path`` (UTF-8, at most ``MAX_BYTES``; a FIFO or a device would
+    block or never end): safe types only, no repeated key, no nesting deeper than the parser can take."""
+    path = Path(path)
+    if not path.exists():
+        raise error("no such file", file=path, field="(file)")
+    if not path.is_file():
+        raise error("not a regular file", file=path, field="(file)")
+    if path.stat().st_size > MAX_BYTES:
+        raise error(f"larger than {MAX_BYTES // 2**20} MiB", file=path, field="(file)")
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        raise error("not UTF-8 text", file=path, field="(file)") from None
+    except OSError as exc:
+        raise error(f"cannot read: {exc.strerror or exc}", file=path, field="(file)") from None
+    try:
+        return yaml.load(text, Loader=_StrictLoader)  # noqa: S506 - a SafeLoader subclass
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}" if mark is not None else "(document)"
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise error(f"not valid YAML: {problem}", file=path, field=where) from None
+    except RecursionError:
+        raise error("not valid YAML: nested too deep to read", file=path, field="(document)") from None
+    except ValueError as exc:  # a number of thousands of digits
+        raise error(f"not valid YAML: {' '.join(str(exc).split())}", file=path, field="(document)") from None
 
 
 def load_section(path: str | Path, section: str, model: type[Model], error: type[RadioslamError]) -> Model:
     """The ``section`` of the YAML file at ``path`` as ``model`` (its defaults where the section is
     absent); ``error`` is raised for a missing or malformed file or an invalid field."""
     path = Path(path)
-    try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise error("no such file", file=path, field="(file)") from None
-    except yaml.YAMLError as exc:
-        raise error(f"not YAML: {str(exc).splitlines()[0]}", file=path, field="(file)") from None
+    doc = read_yaml(path, error)
     if doc is None:
         doc = {}
     if not isinstance(doc, dict):

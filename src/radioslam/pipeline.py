@@ -6,7 +6,6 @@ Each stage reads what the one before wrote, so the command line can run them one
 
 from __future__ import annotations
 
-import json
 import re
 import time
 from collections.abc import Callable
@@ -20,15 +19,18 @@ from radioslam.eval.ranging import beam_half_width_rad, robust_rmse, specular_ra
 from radioslam.eval.trajectory_metrics import align, ate_rmse, rpe_rmse
 from radioslam.io import read_scan, read_tum, write_calibration, write_scan, write_tum
 from radioslam.io.atomic import atomic_write_text
+from radioslam.io.json_io import dumps
 from radioslam.io.manifest import RunManifest
 from radioslam.io.ply import read_map_points
 from radioslam.io.ros_map import FREE, OCCUPIED, UNKNOWN, read_ros_map, write_ros_map
 from radioslam.io.rundir import RunDir
+from radioslam.io.slam_summary import read_slam_summary
 from radioslam.scene import Scene, load_scene, scene_to_yaml
 from radioslam.sensing import Receiver, SensingConfig, estimate_hardware_delay
 from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import Simulator
 from radioslam.sim.calibration_targets import calibration_ranges, simulate_calibration
+from radioslam.sim.memory import check_budget, default_budget
 from radioslam.sim.odometry import odometry_rng, simulated_odometry
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, SlamResult
 from radioslam.slam.occupancy import occupancy_grid
@@ -59,15 +61,18 @@ def calibrate_simulated(radio, out: Path, seed: int, targets: int | None = None,
 
 
 def write_json(path: Path, doc: dict) -> None:
-    atomic_write_text(path, json.dumps(doc, indent=2) + "\n")
+    """Strict JSON: a figure that does not exist (NaN) is null."""
+    atomic_write_text(path, dumps(doc, indent=2) + "\n")
 
 
 def simulate_stage(scene_name: str, out: Path, seed: int, snr_db: float | None, force: bool = False,
-                   captures: Callable[[Scene, RunDir], None] | None = None):
+                   captures: Callable[[Scene, RunDir], None] | None = None, max_memory: int | None = None):
     """A new run in ``out`` (the old one there replaced whole, run.json): scene.yaml, ground_truth.tum and
     calibration.json (eq. (11) on plates simulated with this scene's radio), and what ``captures`` writes;
     the scene, the run directory and the calibration."""
     scene = load_scene(scene_name).with_radio(snr_db=snr_db)
+    # what one pose needs, and the calibration's empty sweep (every beam too), before anything is written
+    check_budget(Simulator.from_scene(scene).memory(), max_memory or default_budget(), scene_name)
     run, manifest = RunDir(out), RunManifest(out)
     manifest.new_run(seed, scene_name, force)
     settings = {"scene": scene_name, "seed": seed, "snr_db": snr_db, "save_iq": captures is not None,
@@ -91,12 +96,13 @@ def sensing_settings(sensing: SensingConfig | None, cal, calibration: Path) -> d
 
 
 def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None,
-                       sensing: SensingConfig | None = None, force: bool = False) -> dict:
+                       sensing: SensingConfig | None = None, force: bool = False,
+                       max_memory: int | None = None) -> dict:
     """The files of :func:`simulate_stage` and scans/ (IQ sensed in memory, by a receiver set by
     ``sensing``); stage seconds."""
     timings = {}
     tick = time.perf_counter()
-    scene, run, cal = simulate_stage(scene_name, out, seed, snr_db, force)
+    scene, run, cal = simulate_stage(scene_name, out, seed, snr_db, force, max_memory=max_memory)
     timings["calibrate"] = time.perf_counter() - tick
     receiver = Receiver(scene.radio, cal.hardware_delay_s, sensing, cal.leakage)
     simulate_s = sense_s = 0.0
@@ -117,8 +123,8 @@ def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | No
 
 def read_scans(run: RunDir) -> list[Scan]:
     """scans/NNNN.ply in pose order; every pose from 0 on must have one."""
-    files = sorted(f for f in run.scans.glob("*.ply") if re.fullmatch(r"\d{4}\.ply", f.name)) \
-        if run.scans.is_dir() else []
+    files = sorted((f for f in run.scans.glob("*.ply") if re.fullmatch(r"\d{4,}\.ply", f.name)),
+                   key=lambda f: int(f.stem)) if run.scans.is_dir() else []
     if not files:
         raise RadioslamError("no scans (NNNN.ply); run 'radioslam sense' first", file=run.scans, field="(directory)")
     indices = [int(f.stem) for f in files]
@@ -194,13 +200,14 @@ def read_odometry(path: Path, scans: int) -> np.ndarray:
 
 def run_scene(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None,
               cfg: SlamConfig | None = None, odometry: Path | None = None,
-              sensing: SensingConfig | None = None, force: bool = False) -> tuple[SlamResult, dict]:
+              sensing: SensingConfig | None = None, force: bool = False,
+              max_memory: int | None = None) -> tuple[SlamResult, dict]:
     """Simulate and sense, SLAM, evaluate: a whole run directory; the SLAM result and metrics."""
     simulated = odometry is not None and str(odometry) == SIMULATED_ODOMETRY
     if simulated and load_scene(scene_name).spec.odometry is None:
         raise RadioslamError("the scene has no odometry: block to simulate one from", file=scene_name,
                              field="odometry")
-    timings = simulate_and_sense(scene_name, out, seed, snr_db, advance, sensing, force)
+    timings = simulate_and_sense(scene_name, out, seed, snr_db, advance, sensing, force, max_memory)
     result = slam_stage(out, cfg, timings, RunDir(out).odometry if simulated else odometry)
     return result, evaluate_stage(out)
 
@@ -251,7 +258,7 @@ def _evaluate(run: RunDir) -> dict:
         raise RadioslamError(f"{len(estimate)} poses against {len(truth)} true ones", file=run.trajectory,
                              field="(poses)")
     scene = load_scene(str(run.scene))
-    summary = json.loads(run.slam_summary.read_text(encoding="utf-8")) if run.slam_summary.exists() else {}
+    summary = read_slam_summary(run.slam_summary)
     _, transform = align(estimate, truth)
     cloud = read_map_points(run.map_cloud)
     points = transform_points(transform, cloud)

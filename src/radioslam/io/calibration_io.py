@@ -2,17 +2,17 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from radioslam.io.atomic import atomic_write_text
 from radioslam.io.errors import CalibrationFileError
+from radioslam.io.json_io import dumps, read_json
 from radioslam.sensing.calibration import Calibration, CalibrationTarget
 from radioslam.sensing.leakage import LeakageModel
 
 
 def write_calibration(path: str | Path, calibration: Calibration) -> None:
-    atomic_write_text(path, json.dumps(calibration.to_dict(), indent=2) + "\n")
+    atomic_write_text(path, dumps(calibration.to_dict(), indent=2) + "\n")
 
 
 def read_calibration(path: str | Path) -> Calibration:
@@ -20,10 +20,9 @@ def read_calibration(path: str | Path) -> Calibration:
     if not path.exists():
         raise CalibrationFileError("no such file; run 'radioslam calibrate' (or 'simulate') first",
                                    file=path, field="(file)")
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise CalibrationFileError(f"not valid JSON: {exc}", file=path, field="(document)") from None
+    doc = read_json(path, CalibrationFileError)
+    if not isinstance(doc, dict):
+        raise CalibrationFileError("must be a JSON object", file=path, field="(document)")
     delay = doc.get("hardware_delay_s") if isinstance(doc, dict) else None
     if not isinstance(delay, (int, float)) or isinstance(delay, bool) or not 0 <= delay < 1e-3:
         raise CalibrationFileError("must be a number of seconds in [0, 1 ms)", file=path, field="hardware_delay_s")

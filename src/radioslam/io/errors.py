@@ -25,3 +25,7 @@ class RosMapError(RadioslamError):
 
 class ManifestError(RadioslamError):
     """A run directory whose run.json is malformed, or whose files do not belong to one complete run."""
+
+
+class SlamSummaryError(RadioslamError):
+    """A slam.json that is malformed."""

@@ -34,6 +34,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 
 from radioslam.io.atomic import atomic_write_text
 from radioslam.io.errors import ManifestError
+from radioslam.io.json_io import read_json
 
 MANIFEST = "run.json"
 FORMAT = "radioslam-run/1"
@@ -144,14 +145,13 @@ class RunManifest:
     def load(self) -> Manifest | None:
         if not self.path.exists():
             return None
+        doc = read_json(self.path, ManifestError)
         try:
-            return Manifest.model_validate_json(self.path.read_bytes())
+            return Manifest.model_validate(doc)
         except ValidationError as exc:
             first = exc.errors()[0]
             where = ".".join(str(p) for p in first["loc"]) or "(document)"
             raise ManifestError(f"not a radioslam run manifest: {first['msg']}", file=self.path, field=where) from None
-        except OSError as exc:
-            raise ManifestError(exc.strerror or str(exc), file=self.path, field="(file)") from None
 
     def save(self, manifest: Manifest) -> None:
         atomic_write_text(self.path, manifest.model_dump_json(indent=2) + "\n")

@@ -48,8 +48,14 @@ def read_vertices(path: str | Path) -> np.ndarray:
     missing = [name for name, _ in VERTEX_DTYPE if name not in vertex.dtype.names]
     if missing:
         raise PlyError("missing vertex property", file=path, field=f"vertex.{missing[0]}")
-    if not (np.isfinite(vertex["x"]).all() and np.isfinite(vertex["y"]).all()):
-        raise PlyError("non-finite coordinates", file=path, field="vertex.x")
+    for name in ("x", "y", "z", "power_db", "range_m"):  # every float field finite (NaN power: a broken sensor)
+        bad = np.flatnonzero(~np.isfinite(np.asarray(vertex[name], float)))
+        if len(bad):
+            raise PlyError(f"non-finite value at vertex {bad[0]} ({len(bad)} in all)", file=path,
+                           field=f"vertex.{name}")
+    bad = np.flatnonzero(np.asarray(vertex["range_m"], float) < 0)
+    if len(bad):
+        raise PlyError(f"negative range at vertex {bad[0]}", file=path, field="vertex.range_m")
     return vertex
 
 

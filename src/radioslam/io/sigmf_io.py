@@ -16,7 +16,6 @@ a ``.sigmf-meta`` that exists describes a complete recording.
 from __future__ import annotations
 
 import base64
-import json
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +27,8 @@ from radioslam.capture import Capture, CaptureError, CaptureMode
 from radioslam.config import RadioConfig
 from radioslam.io.atomic import atomic_path
 from radioslam.io.errors import SigMFError
+from radioslam.io.json_io import read_json
+from radioslam.io.sigmf_schema import check_meta
 
 NS = "radioslam"
 EXTENSION = {"name": NS, "version": "1.0.0", "optional": False}
@@ -40,7 +41,10 @@ def _pack_bits(bits: np.ndarray) -> str:
 
 def _unpack_bits(text: str, shape: tuple[int, ...]) -> np.ndarray:
     raw = np.frombuffer(base64.b64decode(text, validate=True), dtype=np.uint8)
-    return np.unpackbits(raw, count=int(np.prod(shape))).reshape(shape)
+    count = int(np.prod(shape))
+    if len(raw) != -(-count // 8):  # unpackbits would pad a short payload with zeros
+        raise ValueError(f"{len(raw)} bytes for {count} bits")
+    return np.unpackbits(raw, count=count).reshape(shape)
 
 
 def meta_path(base: str | Path) -> Path:
@@ -116,10 +120,8 @@ def read_capture(base_or_meta: str | Path) -> Capture:
     for f in (meta_file, data_file):
         if not f.exists():
             raise SigMFError("no such file", file=f, field="(file)")
-    try:
-        meta = json.loads(meta_file.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise SigMFError(f"not valid JSON: {exc}", file=meta_file, field="(document)") from None
+    meta = read_json(meta_file, SigMFError)
+    check_meta(meta, meta_file)
     try:
         radio = RadioConfig.model_validate(_radio_block(meta, meta_file))
     except ValueError as exc:
@@ -132,6 +134,10 @@ def read_capture(base_or_meta: str | Path) -> Capture:
     if _global(meta, "core:datatype", meta_file) != "cf32_le":
         raise SigMFError("expected cf32_le samples", file=meta_file, field="global.core:datatype")
     window = int(_global(meta, f"{NS}:window_samples", meta_file))
+    burst = (1 + radio.symbols_per_beam) * radio.fft_size  # the PSS symbol and R sensing symbols, without CPs
+    if window < burst:
+        raise SigMFError(f"a beam window of {window} samples cannot hold the burst of {1 + radio.symbols_per_beam} "
+                         f"symbols of {radio.fft_size} samples", file=meta_file, field=f"global.{NS}:window_samples")
     expected = radio.beams_per_orientation * radio.orientations
     annotations = meta.get("annotations", [])
     if len(annotations) != expected:
@@ -157,8 +163,8 @@ def read_capture(base_or_meta: str | Path) -> Capture:
                 raise SigMFError("required field is missing", file=meta_file, field=f"annotations[{b}].{NS}:{key}")
         try:
             fields["tx_bits"].append(_unpack_bits(ann[f"{NS}:tx_bits"], (r, width)))
-        except (ValueError, TypeError):
-            raise SigMFError("not base64 of the packed payload bits", file=meta_file,
+        except (ValueError, TypeError) as exc:
+            raise SigMFError(f"not base64 of the packed payload bits ({exc})", file=meta_file,
                              field=f"annotations[{b}].{NS}:tx_bits") from None
         for key in ANNOTATION_KEYS[:-1]:
             fields[key].append(ann[f"{NS}:{key}"])

@@ -7,6 +7,7 @@ from pathlib import Path
 import yaml
 from pydantic import ValidationError
 
+from radioslam.config_file import read_yaml
 from radioslam.scene.errors import SceneError, validation_error
 from radioslam.scene.model import Scene, build_scene
 from radioslam.scene.schema import SceneSpec
@@ -26,21 +27,7 @@ def scene_from_mapping(data: object, source: str | None = None) -> Scene:
 
 def load_scene_file(path: str | Path) -> Scene:
     """Load a scene YAML file."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SceneError("no such file", file=path, field="(file)") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneError(f"cannot read: {exc}", file=path, field="(file)") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}" if mark is not None else "(document)"
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise SceneError(f"not valid YAML: {problem}", file=path, field=where) from None
-    return scene_from_mapping(data, str(path))
+    return scene_from_mapping(read_yaml(path, SceneError), str(path))
 
 
 def scene_to_yaml(scene: Scene) -> str:

@@ -1,7 +1,8 @@
 """Vectorized 2D ray caster with transmission through walls.
 
 Every ray from the terminal is intersected with every wall segment at once
-(rays × segments arrays). Hits are sorted by distance; a ray goes on through a
+(rays × segments arrays, in blocks of rays of at most ``TABLE_CELLS`` cells, so that a scene of
+thousands of segments needs bounded memory). Hits are sorted by distance; a ray goes on through a
 wall with transmission T > 0 (glass, drywall) and stops at an opaque one. Each
 hit carries the two-way amplitude factor Π T_j² of the walls crossed before it.
 """
@@ -13,6 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from radioslam.scene.geometry import ray_segment_intersections
+
+TABLE_CELLS = 2**22  # rays × segments per block: a few float64 tables of 32 MiB
 
 
 @dataclass(frozen=True)
@@ -34,6 +37,12 @@ def cast_rays(origin: np.ndarray, angles: np.ndarray, segments: np.ndarray,
               segment_transmission: np.ndarray, max_hits: int, max_range: float) -> RayHits:
     """Cast rays from ``origin`` at world ``angles`` (R,) against ``segments`` (S, 2, 2)."""
     angles = np.asarray(angles, dtype=np.float64)
+    block = max(1, TABLE_CELLS // max(len(segments), 1))
+    if len(angles) > block:  # the same hits, block by block
+        parts = [cast_rays(origin, angles[i:i + block], segments, segment_transmission, max_hits, max_range)
+                 for i in range(0, len(angles), block)]
+        return RayHits(angles, *(np.concatenate([getattr(h, f) for h in parts])
+                                 for f in ("distance", "segment", "cos_incidence", "transmission")))
     directions = np.stack([np.cos(angles), np.sin(angles)], axis=-1)
     t, cos_inc = ray_segment_intersections(np.asarray(origin, float), directions, segments)
     h = min(max_hits, segments.shape[0])

@@ -23,6 +23,7 @@ from radioslam.scene.model import Scene
 from radioslam.sim.channel import beam_path_gains, binned_channel_response
 from radioslam.sim.errors import SimulationError
 from radioslam.sim.impairments import receiver_chain, transmitter_chain
+from radioslam.sim.memory import MemoryEstimate, pose_memory
 from radioslam.sim.noise import add_noise, noise_variance
 from radioslam.sim.paths import EchoPaths, echo_paths
 from radioslam.sim.phase_noise import OscillatorPhases
@@ -93,6 +94,11 @@ class Simulator:
                      + np.ceil(longest_delay * num.sample_rate_hz) + WINDOW_GUARD_SAMPLES)
         pss = pss_grid(radio.pss, radio.n_id2, num.subcarrier_indices())
         return cls(scene, radio, mode, num, schedule, beams, rows, noise_variance(radio), window, symbols, cp, pss)
+
+    def memory(self) -> MemoryEstimate:
+        """What simulating one pose needs, before anything is allocated (:mod:`radioslam.sim.memory`)."""
+        return pose_memory(len(self.rows), self.window_length, self.radio,
+                           0 if self.scene is None else len(self.scene.segments))
 
     def timing_offset(self) -> int:
         """Grid mode's FFT window timing: ⌊T_H·f_s⌋ samples after each useful part starts."""

@@ -24,6 +24,7 @@ import dask
 import pandas as pd
 
 from radioslam.io.atomic import atomic_path, atomic_write_text
+from radioslam.io.json_io import dumps
 from radioslam.sweep.spec import RunSpec, SweepSpec
 from radioslam.sweep.task import FAILED, run_one
 
@@ -51,7 +52,7 @@ def run_sweep(spec: SweepSpec, out: Path, scheduler: str | None = None, workers:
     finished = _finished(out, runs, retry_failed)
     todo = [run for run in runs if run.run_id not in finished]
     for done, row in enumerate(_execute(todo, out, scheduler, workers), start=1):
-        atomic_write_text(_row_file(out, row["run_id"]), json.dumps(row) + "\n")
+        atomic_write_text(_row_file(out, row["run_id"]), dumps(row) + "\n")
         finished[row["run_id"]] = row
         if on_row is not None:
             on_row(row, done, len(todo))

@@ -26,9 +26,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from radioslam.config_file import read_yaml
 from radioslam.errors import RadioslamError
 
 
@@ -113,12 +113,7 @@ class RunSpec:
 def load_sweep(path: str | Path) -> SweepSpec:
     """The sweep file at ``path``, validated; a bad file or field raises :class:`SweepError` naming it."""
     path = Path(path)
-    try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (FileNotFoundError, IsADirectoryError):
-        raise SweepError("no such file", file=path, field="(file)") from None
-    except yaml.YAMLError as exc:
-        raise SweepError(f"not YAML: {str(exc).splitlines()[0]}", file=path, field="(file)") from None
+    doc = read_yaml(path, SweepError)
     if not isinstance(doc, dict):
         raise SweepError("a sweep file is a mapping (scenes:, seeds:, snr_db: …)", file=path, field="(top)")
     try:

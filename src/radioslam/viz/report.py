@@ -12,7 +12,9 @@ import numpy as np
 
 from radioslam.io import read_scan, read_tum
 from radioslam.io.atomic import atomic_write_text
+from radioslam.io.json_io import read_json
 from radioslam.io.rundir import RunDir
+from radioslam.io.slam_summary import read_slam_summary
 from radioslam.scene import load_scene
 from radioslam.slam.status import ScanStatus
 from radioslam.viz.fig6 import fig6_figure
@@ -28,8 +30,8 @@ def write_report(out: Path) -> Path:
     scans = [read_scan(run.scan_file(k)) for k in range(len(truth))]
     figure = run.root / "fig6.png"
     fig6_figure(figure, scene.segments, truth, odometry, estimate, scans, title=scene.name)
-    metrics = json.loads(run.metrics.read_text(encoding="utf-8"))
-    summary = json.loads(run.slam_summary.read_text(encoding="utf-8"))
+    metrics = read_json(run.metrics)
+    summary = read_slam_summary(run.slam_summary)
     strip = run.root / "scan_status.png"
     statuses = [ScanStatus(v) for v in summary.get("scan_status", [])]
     scores = np.array([np.nan if v is None else v for v in summary.get("match_score", [None] * len(statuses))],
