@@ -95,6 +95,8 @@ def scenes() -> None:
         typer.echo(f"{name:14s} {summary}")
 
 
+RESUME_HELP = ("go on with an unfinished run of the same scene, seed and settings in --out (killed, or failed): "
+               "the poses it finished, verified by their hashes in run.json, are not done again")
 MAX_MEMORY_HELP = ("GiB one pose may need (estimated before anything is allocated; default: half the machine's "
                    "memory); beyond it, exit 2 naming the field")
 FORCE_HELP = ("write into a directory that holds other files and no run.json (none of them is removed; "
@@ -111,6 +113,7 @@ def simulate(
     save_iq: bool = typer.Option(False, "--save-iq", help="write SigMF captures/NNNN.sigmf-{meta,data}"),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     max_memory: Optional[float] = typer.Option(None, "--max-memory", min=0.01, help=MAX_MEMORY_HELP),
+    resume: bool = typer.Option(False, "--resume", help=RESUME_HELP),
 ) -> None:
     """Simulate a scene: scene.yaml, ground_truth.tum, calibration.json and, with --save-iq, SigMF captures
     (a new run: whatever run the directory held is replaced)."""
@@ -118,15 +121,25 @@ def simulate(
     from radioslam.pipeline import simulate_stage
     from radioslam.sim import Simulator
 
-    def captures(loaded, run) -> None:
+    def captures(loaded, run, kept: set[str]) -> None:
+        from radioslam.io.manifest import RunManifest
+        from radioslam.io.sigmf_io import data_path, meta_path
+
+        def recorded(k: int) -> bool:  # a resumed run's recording, both files as run.json lists them
+            base = run.capture_base(k)
+            return {run.relative(meta_path(base)), run.relative(data_path(base))} <= kept
+
+        done = frozenset(k for k in range(len(loaded.poses)) if recorded(k))
         with progress() as bar:
-            task = bar.add_task("simulating", total=len(loaded.poses))
-            for capture in Simulator.from_scene(loaded).simulate(seed):
-                write_capture(capture, run.capture_base(capture.pose_index))
+            task = bar.add_task("simulating", total=len(loaded.poses), completed=len(done))
+            for capture in Simulator.from_scene(loaded).simulate(seed, skip=done):
+                base = run.capture_base(capture.pose_index)
+                write_capture(capture, base)
+                RunManifest(run.root).record("simulate", [data_path(base), meta_path(base)])
                 bar.advance(task)
 
     loaded, run, _ = simulate_stage(scene, out, seed, snr_db, force, captures if save_iq else None,
-                                    _gib(max_memory))
+                                    _gib(max_memory), resume)
     err.print(f"wrote {run.root} ({len(loaded.poses)} poses{', IQ captures' if save_iq else ''})",
               markup=False)
 
@@ -215,6 +228,7 @@ def sense(
                                           "the receiver, the options above override it"),
     plot_pose: int = typer.Option(0, "--plot-pose", help="pose whose heatmap and cloud to draw; −1: none"),
     max_memory: Optional[float] = typer.Option(None, "--max-memory", min=0.01, help=MAX_MEMORY_HELP),
+    resume: bool = typer.Option(False, "--resume", help=RESUME_HELP),
 ) -> None:
     """Turn SigMF captures into point clouds: DIR/scans/NNNN.ply."""
     from radioslam.errors import RadioslamError
@@ -241,11 +255,16 @@ def sense(
     cfg = _sensing_config(config).model_copy(update=given)
     files = _capture_files(run.captures)
     receiver = None
-    with RunManifest(run.root).stage("sense", sensing_settings(cfg, cal, calibration or run.calibration)), \
+    manifest = RunManifest(run.root)
+    with manifest.stage("sense", sensing_settings(cfg, cal, calibration or run.calibration), resume) as kept, \
             progress() as bar:
         task = bar.add_task("sensing", total=len(files))
         seen: dict[int, Path] = {}
         for f in files:
+            stem = f.name.split(".")[0]  # captures/NNNN: pose NNNN (radioslam's names)
+            if stem.isdigit() and run.relative(run.scan_file(int(stem))) in kept:
+                bar.advance(task)  # a resumed run's scan, verified by its hash
+                continue
             data = f.with_name(f.name.replace(".sigmf-meta", ".sigmf-data"))
             if data.is_file():  # what sensing it needs, before reading it
                 check_budget(recording_memory(data.stat().st_size), _gib(max_memory) or default_budget(), str(data))
@@ -257,6 +276,7 @@ def sense(
             receiver = receiver or Receiver(capture.radio, cal.hardware_delay_s, cfg, cal.leakage)
             result = receiver.sense(capture)
             write_scan(run.scan_file(capture.pose_index), result.scan, comment=f"pose {capture.pose_index}")
+            manifest.record("sense", [run.scan_file(capture.pose_index)])
             if capture.pose_index == plot_pose:
                 from radioslam.viz.figures import polar_heatmap_and_points
 
@@ -391,7 +411,7 @@ def _gib(value: Optional[float]) -> Optional[int]:
 
 def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out: bool, config: Optional[Path] = None,
              odometry: Optional[Path] = None, strict: bool = False, force: bool = False,
-             max_memory: Optional[float] = None) -> None:
+             max_memory: Optional[float] = None, resume: bool = False) -> None:
     from radioslam.pipeline import report_stage, run_scene
     from radioslam.scene import load_scene
 
@@ -400,7 +420,7 @@ def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out
     with progress() as bar:
         task = bar.add_task("simulating and sensing", total=poses)
         result, metrics = run_scene(scene, out, seed, snr_db, lambda: bar.advance(task), cfg, odometry,
-                                    _sensing_config(config), force, _gib(max_memory))
+                                    _sensing_config(config), force, _gib(max_memory), resume)
     report_stage(out)
     _print_metrics(metrics, json_out)
     err.print(f"wrote {out} (report.html)", markup=False)
@@ -421,10 +441,11 @@ def run(
     strict: bool = typer.Option(False, "--strict", help=STRICT_HELP),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     max_memory: Optional[float] = typer.Option(None, "--max-memory", min=0.01, help=MAX_MEMORY_HELP),
+    resume: bool = typer.Option(False, "--resume", help=RESUME_HELP),
 ) -> None:
     """simulate → sense → slam → evaluate on any scene, and write report.html (a new run: whatever run the
     directory held is replaced)."""
-    _run_all(scene, out, seed, snr_db, json_out, config, odometry, strict, force, max_memory)
+    _run_all(scene, out, seed, snr_db, json_out, config, odometry, strict, force, max_memory, resume)
 
 
 @app.command()
@@ -436,9 +457,11 @@ def demo(
     strict: bool = typer.Option(False, "--strict", help=STRICT_HELP),
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     max_memory: Optional[float] = typer.Option(None, "--max-memory", min=0.01, help=MAX_MEMORY_HELP),
+    resume: bool = typer.Option(False, "--resume", help=RESUME_HELP),
 ) -> None:
     """The paper's Fig. 6 simulation end to end: paper-cnv, 60 poses, SNR 10 dB, waveform IQ."""
-    _run_all("paper-cnv", out, seed, None, json_out, strict=strict, force=force, max_memory=max_memory)
+    _run_all("paper-cnv", out, seed, None, json_out, strict=strict, force=force, max_memory=max_memory,
+             resume=resume)
 
 
 @app.command()

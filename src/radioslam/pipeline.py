@@ -6,6 +6,7 @@ Each stage reads what the one before wrote, so the command line can run them one
 
 from __future__ import annotations
 
+import hashlib
 import re
 import time
 from collections.abc import Callable
@@ -17,7 +18,7 @@ from radioslam.errors import RadioslamError
 from radioslam.eval.map_metrics import map_coverage, map_error
 from radioslam.eval.ranging import beam_half_width_rad, robust_rmse, specular_range_errors
 from radioslam.eval.trajectory_metrics import align, ate_rmse, rpe_rmse
-from radioslam.io import read_scan, read_tum, write_calibration, write_scan, write_tum
+from radioslam.io import read_calibration, read_scan, read_tum, write_calibration, write_scan, write_tum
 from radioslam.io.atomic import atomic_write_text
 from radioslam.io.json_io import dumps
 from radioslam.io.manifest import RunManifest
@@ -35,6 +36,7 @@ from radioslam.sim.odometry import odometry_rng, simulated_odometry
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, SlamResult
 from radioslam.slam.occupancy import occupancy_grid
 from radioslam.slam.se2 import transform_points
+from radioslam.slam.thinning import thin_scan
 
 SIMULATED_ODOMETRY = "simulated"  # run --odometry simulated: the scene's own drifting odometry
 
@@ -66,26 +68,31 @@ def write_json(path: Path, doc: dict) -> None:
 
 
 def simulate_stage(scene_name: str, out: Path, seed: int, snr_db: float | None, force: bool = False,
-                   captures: Callable[[Scene, RunDir], None] | None = None, max_memory: int | None = None):
+                   captures: Callable[[Scene, RunDir, set[str]], None] | None = None, max_memory: int | None = None,
+                   resume: bool = False):
     """A new run in ``out`` (the old one there replaced whole, run.json): scene.yaml, ground_truth.tum and
-    calibration.json (eq. (11) on plates simulated with this scene's radio), and what ``captures`` writes;
-    the scene, the run directory and the calibration."""
+    calibration.json (eq. (11) on plates simulated with this scene's radio), and what ``captures`` writes
+    (given the files a resumed run kept); the scene, the run directory and the calibration. With
+    ``resume``, an unfinished run of the same scene, seed and settings there is gone on with."""
     scene = load_scene(scene_name).with_radio(snr_db=snr_db)
     # what one pose needs, and the calibration's empty sweep (every beam too), before anything is written
     check_budget(Simulator.from_scene(scene).memory(), max_memory or default_budget(), scene_name)
     run, manifest = RunDir(out), RunManifest(out)
-    manifest.new_run(seed, scene_name, force)
-    settings = {"scene": scene_name, "seed": seed, "snr_db": snr_db, "save_iq": captures is not None,
-                "radio": scene.radio.model_dump(mode="json")}
-    with manifest.stage("simulate", settings):
-        atomic_write_text(run.scene, scene_to_yaml(scene))
+    manifest.new_run(seed, scene_name, force, resume)
+    scene_text = scene_to_yaml(scene)
+    settings = {"scene": scene_name, "scene_sha256": hashlib.sha256(scene_text.encode()).hexdigest(), "seed": seed,
+                "snr_db": snr_db, "save_iq": captures is not None, "radio": scene.radio.model_dump(mode="json")}
+    if resume and manifest.is_complete("simulate", settings):
+        return scene, run, read_calibration(run.calibration)
+    with manifest.stage("simulate", settings, resume) as kept:
+        atomic_write_text(run.scene, scene_text)
         write_tum(run.ground_truth, run.pose_timestamps(len(scene.poses)), scene.poses)
         if scene.spec.odometry is not None:  # a drifting wheel/IMU odometry of the same walk
             write_tum(run.odometry, run.pose_timestamps(len(scene.poses)),
                       simulated_odometry(scene.poses, scene.spec.odometry, odometry_rng(seed)))
         cal = calibrate_simulated(scene.radio, run.calibration, seed)
         if captures is not None:
-            captures(scene, run)
+            captures(scene, run, kept)
     return scene, run, cal
 
 
@@ -97,23 +104,30 @@ def sensing_settings(sensing: SensingConfig | None, cal, calibration: Path) -> d
 
 def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None,
                        sensing: SensingConfig | None = None, force: bool = False,
-                       max_memory: int | None = None) -> dict:
+                       max_memory: int | None = None, resume: bool = False) -> dict:
     """The files of :func:`simulate_stage` and scans/ (IQ sensed in memory, by a receiver set by
-    ``sensing``); stage seconds."""
+    ``sensing``); stage seconds. With ``resume``, the poses whose scans an unfinished run of the same
+    settings wrote (and recorded) are not simulated again."""
     timings = {}
     tick = time.perf_counter()
-    scene, run, cal = simulate_stage(scene_name, out, seed, snr_db, force, max_memory=max_memory)
+    scene, run, cal = simulate_stage(scene_name, out, seed, snr_db, force, max_memory=max_memory, resume=resume)
     timings["calibrate"] = time.perf_counter() - tick
-    receiver = Receiver(scene.radio, cal.hardware_delay_s, sensing, cal.leakage)
+    receiver, manifest = Receiver(scene.radio, cal.hardware_delay_s, sensing, cal.leakage), RunManifest(out)
     simulate_s = sense_s = 0.0
-    captures = Simulator.from_scene(scene).simulate(seed)
-    with RunManifest(out).stage("sense", sensing_settings(sensing, cal, run.calibration)):
-        for index in range(len(scene.poses)):
+    with manifest.stage("sense", sensing_settings(sensing, cal, run.calibration), resume) as kept:
+        done = frozenset(k for k in range(len(scene.poses)) if run.relative(run.scan_file(k)) in kept)
+        for _ in done:
+            if advance:
+                advance()
+        captures = Simulator.from_scene(scene).simulate(seed, skip=done)
+        for _ in range(len(scene.poses) - len(done)):
             tick = time.perf_counter()
             capture = next(captures)
             simulate_s += time.perf_counter() - tick
             tick = time.perf_counter()
-            write_scan(run.scan_file(capture.pose_index), receiver.sense(capture).scan, comment=f"pose {index}")
+            path = run.scan_file(capture.pose_index)
+            write_scan(path, receiver.sense(capture).scan, comment=f"pose {capture.pose_index}")
+            manifest.record("sense", [path])
             sense_s += time.perf_counter() - tick
             if advance:
                 advance()
@@ -159,7 +173,8 @@ def write_slam_outputs(run: RunDir, scans: list[Scan], result: SlamResult, cfg: 
     write_tum(run.trajectory, stamps, result.poses)
     write_tum(run.trajectory_odometry, stamps, result.odometry)
     kept = [k for k, status in enumerate(result.status) if status is not ScanStatus.SKIPPED]
-    write_ros_map(run.map_yaml, occupancy_grid(result.poses[kept], [scans[k].xy for k in kept], cfg.map))
+    thinned = [thin_scan(scans[k], cfg.scan.max_points, cfg.scan.max_range_m, cfg.grid.resolution_m)[0] for k in kept]
+    write_ros_map(run.map_yaml, occupancy_grid(result.poses[kept], [s.xy for s in thinned], cfg.map))
     fused = Scan(*(np.concatenate([getattr(scans[k], f) for k in kept]) if kept else np.zeros(0)
                    for f in ("range_m", "angle_rad", "power_db", "beam", "orientation")))
     world = np.concatenate([transform_points(result.poses[k], scans[k].xy) for k in kept]) if kept else np.zeros((0, 2))
@@ -201,13 +216,13 @@ def read_odometry(path: Path, scans: int) -> np.ndarray:
 def run_scene(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None,
               cfg: SlamConfig | None = None, odometry: Path | None = None,
               sensing: SensingConfig | None = None, force: bool = False,
-              max_memory: int | None = None) -> tuple[SlamResult, dict]:
+              max_memory: int | None = None, resume: bool = False) -> tuple[SlamResult, dict]:
     """Simulate and sense, SLAM, evaluate: a whole run directory; the SLAM result and metrics."""
     simulated = odometry is not None and str(odometry) == SIMULATED_ODOMETRY
     if simulated and load_scene(scene_name).spec.odometry is None:
         raise RadioslamError("the scene has no odometry: block to simulate one from", file=scene_name,
                              field="odometry")
-    timings = simulate_and_sense(scene_name, out, seed, snr_db, advance, sensing, force, max_memory)
+    timings = simulate_and_sense(scene_name, out, seed, snr_db, advance, sensing, force, max_memory, resume)
     result = slam_stage(out, cfg, timings, RunDir(out).odometry if simulated else odometry)
     return result, evaluate_stage(out)
 

@@ -19,6 +19,7 @@ that holds other files, unless forced.
 from __future__ import annotations
 
 import hashlib
+import json
 import platform
 import re
 import sys
@@ -34,7 +35,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 
 from radioslam.io.atomic import atomic_write_text
 from radioslam.io.errors import ManifestError
-from radioslam.io.json_io import read_json
+from radioslam.io.json_io import dumps, read_json
 
 MANIFEST = "run.json"
 FORMAT = "radioslam-run/1"
@@ -109,9 +110,19 @@ def _version(name: str) -> str:
         return "absent"
 
 
+def _as_stored(settings: dict) -> dict:
+    """``settings`` as run.json holds them (JSON types), so that a stage's settings compare equal to the
+    stored ones."""
+    return json.loads(dumps(settings))
+
+
 def file_hash(path: Path) -> str:
+    """SHA-256 of a file, read in blocks of 1 MiB."""
+    digest = hashlib.sha256()
     with open(path, "rb") as f:
-        return hashlib.file_digest(f, "sha256").hexdigest()
+        for block in iter(lambda: f.read(2**20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def stage_of(relative: str) -> str | None:
@@ -160,10 +171,16 @@ class RunManifest:
         return Manifest(run_id=uuid.uuid4().hex, created=_now(), command=list(sys.argv), versions=versions(),
                         seed=seed, scene=scene)
 
-    def new_run(self, seed: int, scene: str, force: bool = False) -> Manifest:
+    def new_run(self, seed: int, scene: str, force: bool = False, resume: bool = False) -> Manifest:
         """Start a new run here: the old run's files (those its manifest lists) are removed first; a
-        directory holding anything else, and no manifest, is refused unless ``force``."""
+        directory holding anything else, and no manifest, is refused unless ``force``. With ``resume``,
+        a run of the same scene and seed found here is kept, to go on from (:meth:`begin`)."""
         old = self.load()
+        if resume and old is not None and old.stages:
+            if (old.scene, old.seed) != (scene, seed):
+                raise ManifestError(f"--resume: this directory holds a run of {old.scene!r} with seed {old.seed}, "
+                                    f"not of {scene!r} with seed {seed}", file=self.path, field="scene, seed")
+            return old
         if old is None and not force and self.root.is_dir() and any(self.root.iterdir()):
             raise ManifestError("holds files and no run.json: not a radioslam run; choose an empty directory or "
                                 "pass --force to write into it", file=self.root, field="(directory)")
@@ -178,27 +195,56 @@ class RunManifest:
         self.save(manifest)
         return manifest
 
-    def begin(self, stage: str, settings: dict | None = None) -> Manifest:
+    def begin(self, stage: str, settings: dict | None = None, resume: bool = False) -> set[str]:
         """Stage ``stage`` starts: the stages before it must be complete and their files on disk as
         listed; it and every stage after are invalidated (their files removed). A directory without a
-        manifest is adopted first (:meth:`adopt`)."""
+        manifest is adopted first (:meth:`adopt`). With ``resume``, the files an unfinished run of this
+        stage with the same settings recorded (:meth:`record`) and that still hash as recorded are kept:
+        their relative paths are returned, for the stage to skip."""
         manifest = self.load() or self.adopt(stage)
         index = STAGES.index(stage)
         self._verify(manifest, STAGES[:index], stage)
+        settings = _as_stored(settings or {})
+        kept = self._resumable(stage, manifest.stages.get(stage), settings) if resume else {}
         later = STAGES[index:]
-        stale = [f for s in later if s in manifest.stages for f in manifest.stages[s].outputs]
+        stale = [f for s in later if s in manifest.stages for f in manifest.stages[s].outputs if f not in kept]
         manifest.removing = sorted({*manifest.removing, *stale})  # listed until removed (a kill in between)
         for s in later:
             manifest.stages.pop(s, None)
         record = manifest.stages[stage] = StageRecord(status=StageStatus.STARTED, started=_now(),
-                                                      settings=settings or {})
+                                                      settings=settings, outputs=kept)
         self.save(manifest)
         self._remove(manifest.removing)
         self._remove_temporary(later)
         manifest.removing = []
-        record.foreign = {f: file_hash(self.root / f) for f in run_files(self.root)[stage]}
+        record.foreign = {f: file_hash(self.root / f) for f in run_files(self.root)[stage] if f not in kept}
         self.save(manifest)
-        return manifest
+        return set(kept)
+
+    def record(self, stage: str, paths: Iterable[Path]) -> None:
+        """Files the running stage ``stage`` has finished (a pose's scan): a resumed run keeps them."""
+        manifest = self._running(stage)
+        for path in paths:
+            relative = Path(path).relative_to(self.root).as_posix()
+            manifest.stages[stage].outputs[relative] = file_hash(self.root / relative)
+        self.save(manifest)
+
+    def is_complete(self, stage: str, settings: dict | None = None) -> bool:
+        """Stage ``stage`` completed here with these settings, its files as recorded (a resumed run skips it)."""
+        manifest = self.load()
+        record = None if manifest is None else manifest.stages.get(stage)
+        return record is not None and record.status is StageStatus.COMPLETE and \
+            record.settings == _as_stored(settings or {}) and \
+            len(self._resumable(stage, record, record.settings)) == len(record.outputs)
+
+    def _resumable(self, stage: str, record: StageRecord | None, settings: dict) -> dict[str, str]:
+        """The outputs of ``record`` (made with ``settings``) still on disk as recorded."""
+        if record is None:
+            return {}
+        if record.settings != settings:
+            raise ManifestError("--resume: this stage ran with other settings; run without --resume",
+                                file=self.path, field=f"stages.{stage}.settings")
+        return {f: h for f, h in record.outputs.items() if (self.root / f).is_file() and file_hash(self.root / f) == h}
 
     def complete(self, stage: str) -> None:
         """Stage ``stage`` is complete: its files now in the directory are its outputs (``begin``
@@ -220,12 +266,12 @@ class RunManifest:
         self.save(manifest)
 
     @contextmanager
-    def stage(self, stage: str, settings: dict | None = None) -> Iterator[None]:
-        """``begin``, the body, then ``complete``; a failure (an interrupt too) marks the stage failed
-        and goes on."""
-        self.begin(stage, settings)
+    def stage(self, stage: str, settings: dict | None = None, resume: bool = False) -> Iterator[set[str]]:
+        """``begin``, the body (given the files a resumed stage kept), then ``complete``; a failure (an
+        interrupt too) marks the stage failed and goes on."""
+        kept = self.begin(stage, settings, resume)
         try:
-            yield
+            yield kept
         except BaseException as exc:
             self.fail(stage, f"{type(exc).__name__}: {exc}")
             raise

@@ -69,6 +69,10 @@ class RunDir:
     def report(self) -> Path:
         return self.root / "report.html"
 
+    def relative(self, path: Path) -> str:
+        """``path`` (in the run directory) relative to it, as run.json names files."""
+        return Path(path).relative_to(self.root).as_posix()
+
     def scan_file(self, pose_index: int) -> Path:
         return self.scans / f"{pose_index:04d}.ply"
 

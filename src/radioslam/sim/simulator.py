@@ -166,8 +166,10 @@ class Simulator:
         return OscillatorPhases.draw(rng, n_beams, self.window_length, latency, imp.phase_noise_linewidth_hz, fs,
                                      imp.oscillators)
 
-    def simulate(self, seed: int):
-        """Captures of every pose; pose i draws from its own child of ``SeedSequence(seed)``."""
+    def simulate(self, seed: int, skip: frozenset[int] = frozenset()):
+        """Captures of every pose but those in ``skip``; pose i draws from its own child of
+        ``SeedSequence(seed)``, so a pose's capture is the same whichever others are simulated."""
         children = np.random.SeedSequence(seed).spawn(len(self.scene.poses))
         for i, child in enumerate(children):
-            yield self.simulate_pose(i, np.random.default_rng(child))
+            if i not in skip:
+                yield self.simulate_pose(i, np.random.default_rng(child))

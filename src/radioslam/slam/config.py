@@ -43,6 +43,11 @@ class ScanConfig(_Section):
     """How a radio scan becomes matchable points (:mod:`radioslam.slam.normals`)."""
 
     min_points: int = Field(8, ge=3)  # a scan with fewer points is skipped with a warning
+    # bounded memory whatever the input (:mod:`radioslam.slam.thinning`): points beyond max_range_m are
+    # dropped, and a scan of more than max_points is thinned to its strongest point per grid cell, then
+    # to its max_points strongest (a radio scan holds a few hundred at most)
+    max_points: int = Field(4096, ge=16, le=1_000_000)
+    max_range_m: float = Field(100.0, gt=0, le=10_000.0)
     arc_range_m: float = Field(0.10, gt=0)  # consecutive beams within this range form one arc
     # an arc peaking on its sector's edge joins the adjacent orientation's arc at its range whose peak
     # lies within this bearing (a wall between two sectors)

@@ -32,6 +32,7 @@ from radioslam.slam.result import SlamResult
 from radioslam.slam.scan_points import fused_points, prepare_points
 from radioslam.slam.status import ScanStatus
 from radioslam.slam.submap_map import SubmapMap
+from radioslam.slam.thinning import thin_scan
 
 
 @dataclass(frozen=True)
@@ -84,12 +85,14 @@ class SlamSession:
         """Scan k (the next one): its pose now."""
         cfg, k, tick = self.cfg, len(self.steps), time.perf_counter()
         front_end, loop_closer, back_end, forks = self.front_end, self.loop_closer, self.back_end, self.forks
+        # 1. the scan's points (thinned where there are too many, or too far) and the specular normal of the
+        #    wall each came from
+        scan, thinned = thin_scan(scan, cfg.scan.max_points, cfg.scan.max_range_m, cfg.grid.resolution_m)
         self.enough_points |= len(scan) >= cfg.scan.min_points
-        # 1. the scan's points and the specular normal of the wall each came from
         points = prepare_points(scan, cfg.scan, cfg.grid)
         self.sightings.append(points.sightings)
         # 2. register it against the local map: the motion's hypotheses and the scan's own rotation candidates
-        step = front_end.register(k, points, back_end.estimates)
+        step = front_end.register(k, points, back_end.estimates).noted(thinned)
         # 3. a lost scan (one of a stretch nothing matched, or one whose match puts points on space the map
         #    saw through) is searched for in the whole map: relocalized where the map explains it far better
         self.lost = self.lost + 1 if step.status is ScanStatus.PREDICTED else 0
