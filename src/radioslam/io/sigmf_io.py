@@ -31,6 +31,8 @@ from radioslam.io.json_io import read_json
 from radioslam.io.sigmf_schema import check_meta
 
 NS = "radioslam"
+# the specification the library writes (sigmf < 1.2.1 has no __specification__: its version was the spec's)
+SIGMF_SPECIFICATION = getattr(sigmf, "__specification__", sigmf.__version__)
 EXTENSION = {"name": NS, "version": "1.0.0", "optional": False}
 ANNOTATION_KEYS = ("orientation", "beam_index", "beam_angle_rad", "ssb_index", "symbol_indices", "tx_bits")
 
@@ -67,7 +69,7 @@ def write_capture(capture: Capture, base: str | Path) -> Path:
     window = samples.shape[1]
     record = SigMFFile(data_file=str(data), global_info={
         "core:datatype": "cf32_le", "core:sample_rate": radio.sample_rate_hz,
-        "core:version": sigmf.__specification__, "core:num_channels": 1,
+        "core:version": SIGMF_SPECIFICATION, "core:num_channels": 1,
         "core:recorder": "radioslam simulator", "core:extensions": [EXTENSION],
         "core:description": f"pose {capture.pose_index}: {capture.n_beams} beam windows of {window} samples",
         f"{NS}:carrier_hz": radio.carrier_hz, f"{NS}:codebook_bits": radio.codebook_bits,
