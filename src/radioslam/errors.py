@@ -21,6 +21,11 @@ class RadioslamError(Exception):
         super().__init__(self.one_line())
 
     def one_line(self) -> str:
-        parts = [p for p in (self.file, self.field) if p]
-        text = " ".join(self.reason.split())
+        parts = [_printable(p) for p in (self.file, self.field) if p]
+        text = " ".join(_printable(self.reason).split())
         return ": ".join([*parts, text])
+
+
+def _printable(text: str) -> str:
+    """``text`` with every control character (a newline in a file name or a key) written as its escape."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)

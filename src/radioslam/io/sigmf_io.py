@@ -152,8 +152,10 @@ def read_capture(base_or_meta: str | Path) -> Capture:
     try:
         record = SigMFFile(metadata=meta, data_file=str(data_file))  # verifies core:sha512
         samples = record.read_samples().reshape(expected, window)
-    except (_SigMFLibraryError, ValueError, OSError) as exc:
-        raise SigMFError(f"rejected by sigmf: {exc}", file=meta_file, field="(document)") from None
+    except (_SigMFLibraryError, ValueError, OSError, TypeError, KeyError, IndexError, AttributeError) as exc:
+        # the library reading what the schema does not cover (captures, core fields) of the wrong type
+        raise SigMFError(f"rejected by sigmf: {type(exc).__name__}: {exc}", file=meta_file,
+                         field="(document)") from None
     fields = {k: [] for k in ANNOTATION_KEYS}
     r, width = radio.symbols_per_beam, 4 * radio.n_subcarriers
     for b, ann in enumerate(annotations):
