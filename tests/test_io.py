@@ -4,10 +4,10 @@ import json
 
 import numpy as np
 import pytest
-import sigmf
 from evo.tools import file_interface
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from sigmf import sigmffile
 
 from radioslam.capture import CaptureError, CaptureMode
 from radioslam.io import SigMFError, TumError, read_capture, read_tum, write_capture, write_tum
@@ -38,7 +38,7 @@ def test_sigmf_round_trip_is_bit_exact(capture, written):
 
 
 def test_sigmf_metadata_passes_the_sigmf_validator(capture, written):
-    record = sigmf.fromfile(str(written))  # checks the data file's SHA-512 too
+    record = sigmffile.fromfile(str(written))  # checks the data file's SHA-512 too
     record.validate()
     meta = json.loads(written.read_text())
     g = meta["global"]

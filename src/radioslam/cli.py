@@ -79,10 +79,28 @@ def out_path(value: str) -> Path:
     return Path(value)
 
 
-def progress() -> Progress:
+class _NoProgress:
+    """What a progress bar does off a terminal: nothing (rich < 13.4 writes a newline even when disabled)."""
+
+    def __enter__(self) -> "_NoProgress":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        return None
+
+    def add_task(self, *args, **kwargs) -> int:
+        return 0
+
+    def advance(self, *args, **kwargs) -> None:
+        return None
+
+
+def progress() -> Progress | _NoProgress:
     """A progress bar on stderr, shown only on a terminal."""
+    if not sys.stderr.isatty():
+        return _NoProgress()
     return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
-                    console=err, disable=not sys.stderr.isatty(), transient=True)
+                    console=err, transient=True)
 
 
 @app.command()
@@ -512,8 +530,7 @@ def main() -> None:
     command = typer.main.get_command(app)
     signal.signal(signal.SIGTERM, _terminate)
     try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("default")
+        with warnings.catch_warnings(record=True) as caught:  # the filters as they are: libraries' deprecations
             code = command.main(prog_name="radioslam", standalone_mode=False)
         if not code:
             _report_warnings(caught)

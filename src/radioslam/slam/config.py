@@ -46,7 +46,7 @@ class ScanConfig(_Section):
     # bounded memory whatever the input (:mod:`radioslam.slam.thinning`): points beyond max_range_m are
     # dropped, and a scan of more than max_points is thinned to its strongest point per grid cell, then
     # to its max_points strongest (a radio scan holds a few hundred at most)
-    max_points: int = Field(4096, ge=16, le=1_000_000)
+    max_points: int = Field(1024, ge=16, le=1_000_000)
     max_range_m: float = Field(100.0, gt=0, le=10_000.0)
     arc_range_m: float = Field(0.10, gt=0)  # consecutive beams within this range form one arc
     # an arc peaking on its sector's edge joins the adjacent orientation's arc at its range whose peak
