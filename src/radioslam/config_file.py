@@ -12,6 +12,7 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from radioslam.errors import RadioslamError
+from radioslam.text_file import read_text
 
 Model = TypeVar("Model", bound=BaseModel)
 MAX_BYTES = 16 * 2**20  # a scene, config or sweep file is text of a few kB
@@ -35,18 +36,7 @@ def read_yaml(path: str | Path, error: type[RadioslamError]) -> object:
     """The YAML document in the regular file ``path`` (UTF-8, at most ``MAX_BYTES``; a FIFO or a device would
     block or never end): safe types only, no repeated key, no nesting deeper than the parser can take."""
     path = Path(path)
-    if not path.exists():
-        raise error("no such file", file=path, field="(file)")
-    if not path.is_file():
-        raise error("not a regular file", file=path, field="(file)")
-    if path.stat().st_size > MAX_BYTES:
-        raise error(f"larger than {MAX_BYTES // 2**20} MiB", file=path, field="(file)")
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError:
-        raise error("not UTF-8 text", file=path, field="(file)") from None
-    except OSError as exc:
-        raise error(f"cannot read: {exc.strerror or exc}", file=path, field="(file)") from None
+    text = read_text(path, error, MAX_BYTES)
     try:
         return yaml.load(text, Loader=_StrictLoader)  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as exc:

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from radioslam.errors import RadioslamError
+from radioslam.text_file import read_text
 
 MAX_BYTES = 64 * 2**20
 
@@ -72,15 +73,4 @@ def loads(text: str, file: str | Path, error: type[RadioslamError] = RadioslamEr
 
 def read_json(path: str | Path, error: type[RadioslamError] = RadioslamError) -> Any:
     """The strict JSON document in the regular file ``path`` (at most ``MAX_BYTES``)."""
-    path = Path(path)
-    if not path.exists():
-        raise error("no such file", file=path, field="(file)")
-    if not path.is_file():
-        raise error("not a regular file", file=path, field="(file)")
-    if path.stat().st_size > MAX_BYTES:
-        raise error(f"larger than {MAX_BYTES // 2**20} MiB", file=path, field="(file)")
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError:
-        raise error("not UTF-8 text", file=path, field="(document)") from None
-    return loads(text, path, error)
+    return loads(read_text(path, error, MAX_BYTES), path, error)
