@@ -33,7 +33,7 @@ def test_thinning_drops_far_points_then_keeps_each_cells_strongest_then_the_stro
     # each cell's strongest point first, then the strongest of those
     near = scan.range_m < 100
     cells = np.floor(scan.xy[near] / 0.05).astype(int)
-    _, cell = np.unique(cells, axis=0, return_inverse=True)
+    cell = np.unique(cells, axis=0, return_inverse=True)[1].reshape(-1)  # numpy 2.0.0 gives (N, 1)
     winners = np.full(cell.max() + 1, -np.inf)
     np.maximum.at(winners, cell, scan.power_db[near])
     np.testing.assert_array_equal(np.sort(thinned.power_db), np.sort(winners)[-1000:])
