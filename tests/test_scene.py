@@ -53,6 +53,12 @@ def _variant(**changes):
      "exceed the 64 SSBs"),
     (_variant(radio={"codebook_bits": 7, "beams_per_side": 31}), "radio", "exceed 304 reserved symbols"),
     (_variant(radio={"subcarrier_spacing_hz": 60e3}), "radio", "120 kHz"),
+    # bounds before work (issue #15): a building, not a continent; a radio this machine can simulate
+    (_variant(trajectory={"poses": [[2e4, 0.0, 0.0]]}), "trajectory.poses[0][0]", "less than or equal to 10000"),
+    (_variant(walls=[{"points": [[x / 10, 0] for x in range(20_002)], "material": "metal"}]), "(top level)",
+     "20,001 wall segments: at most 20,000"),
+    (_variant(radio={"fft_size": 2**24}), "radio.fft_size", "less than or equal to 4096"),
+    (_variant(radio={"snr_db": 1e9}), "radio.snr_db", "less than or equal to 400"),
 ])
 def test_scene_errors_name_field_and_reason(data, field, reason):
     with pytest.raises(SceneError) as info:

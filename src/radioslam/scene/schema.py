@@ -7,13 +7,18 @@ Unknown keys are rejected everywhere; the optional ``radio:`` block is a
 from __future__ import annotations
 
 from enum import Enum
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from radioslam.config import RadioConfig
 
-Point = tuple[float, float]
+# a scene is a building, not a continent: every length and grid stays bounded (issue #15)
+EXTENT_M = 10_000.0
+MAX_SEGMENTS = 20_000  # each pose casts a specular ray per segment against every segment
+MAX_POSES = 100_000
+Coordinate = Annotated[float, Field(ge=-EXTENT_M, le=EXTENT_M)]
+Point = tuple[Coordinate, Coordinate]
 
 
 class _Strict(BaseModel):
@@ -52,14 +57,15 @@ class Heading(str, Enum):
 
 class CircleSpec(_Strict):
     center: Point
-    radius: float = Field(gt=0.0)
-    poses: int = Field(ge=1, le=100_000)
+    radius: float = Field(gt=0.0, le=EXTENT_M)
+    poses: int = Field(ge=1, le=MAX_POSES)
     heading: Heading = Heading.TANGENT
 
 
 class TrajectorySpec(_Strict):
     circle: CircleSpec | None = None
-    poses: list[tuple[float, float, float]] | None = None
+    poses: list[tuple[Coordinate, Coordinate, Annotated[float, Field(ge=-100.0, le=100.0)]]] | None = \
+        Field(None, max_length=MAX_POSES)
 
     @model_validator(mode="after")
     def _exactly_one(self) -> "TrajectorySpec":
@@ -89,3 +95,10 @@ class SceneSpec(_Strict):
     trajectory: TrajectorySpec
     radio: RadioConfig = Field(default_factory=RadioConfig)
     odometry: OdometrySpec | None = None  # optional: the simulator also writes a drifting odometry
+
+    @model_validator(mode="after")
+    def _segment_count(self) -> "SceneSpec":
+        segments = sum(len(w.points) - 1 for w in self.walls)
+        if segments > MAX_SEGMENTS:
+            raise ValueError(f"{segments:,} wall segments: at most {MAX_SEGMENTS:,}")
+        return self

@@ -62,14 +62,14 @@ class SensingConfig(BaseModel):
     detector: Detector = Detector.SINGLE
     peaks: int = Field(3, ge=1, le=16)  # K̂, the IFFT peaks refined per beam (§III-A)
     refine: Refinement = Refinement.BRACKETED
-    precision_m: float = Field(0.001, gt=0)  # refinement stops at this range precision
+    precision_m: float = Field(0.001, ge=1e-6, le=1.0)  # refinement stops at this range precision
     max_iterations: int = Field(20, ge=0, le=40)  # refinement steps at most
     decimation: int = Field(4, ge=1, le=16)  # PSS synchronization rate f_s/4 (§III-C)
     min_range_m: float | None = Field(None, ge=0)  # gate; None: NEAR_GATE_M with a calibrated leakage, else FAR
     # what cancelling the leakage may leave, relative to it (a lag 0.02 sample off leaves −30 dB): the
     # residual's profile at this level joins the detection threshold, so it never becomes a target
     leakage_residual_db: float = Field(-30.0, le=0)
-    max_range_m: float | None = Field(None, gt=0)  # None: the radio's max_range_m
+    max_range_m: float | None = Field(None, gt=0, le=1000.0)  # None: the radio's max_range_m
     noise_pfa: float = Field(1e-6, gt=0, lt=1)  # a peak must clear the noise floor at this Pfa
     point_threshold_db: float | None = Field(None, le=0)  # None: the radio's (−13 dB, §IV-A) for single,
     # and for multi this one: cancellation removes range sidelobes and CFAR bounds false alarms, so the
@@ -81,8 +81,8 @@ class SensingConfig(BaseModel):
     point_filter: PointFilter = PointFilter.SAME_RANGE
     point_floor_db: float = Field(-25.0, le=0)
     cfar: CfarKind = CfarKind.CA
-    cfar_guard: int = Field(3, ge=0)
-    cfar_train: int = Field(16, ge=2)
+    cfar_guard: int = Field(3, ge=0, le=256)
+    cfar_train: int = Field(16, ge=2, le=1024)
     cfar_pfa: float = Field(1e-6, gt=0, lt=1)
     max_targets: int = Field(3, ge=1, le=16)  # per beam, multi-target mode
     relax_passes: int = Field(1, ge=0, le=20)  # single: cyclic re-estimation passes before the joint polish

@@ -21,20 +21,20 @@ class _Section(BaseModel):
 class GridConfig(_Section):
     """The likelihood field every matcher scores against (Olson 2009 §III)."""
 
-    resolution_m: float = Field(0.05, gt=0)
+    resolution_m: float = Field(0.05, ge=0.005, le=1.0)
     # point likelihood exp(−d²/2σ²): radio points sit 1–7 cm off their wall (range error ≈ mm,
     # the beam direction quantized to the codebook); σ also absorbs submap blur
-    sigma_m: float = Field(0.05, gt=0)
+    sigma_m: float = Field(0.05, gt=0, le=2.0)
     # specular normals agree to ±σ_ψ (arc peaks locate a wall normal to ~0.1°; the coarse search steps 0.5°)
     normal_sigma_deg: float = Field(1.0, gt=0)
     # points with a normal are scored point-to-plane within this distance of the nearest map point
-    plane_reach_m: float = Field(1.5, ge=0)
+    plane_reach_m: float = Field(1.5, ge=0, le=10.0)
     # negative evidence (:mod:`radioslam.slam.free_space`): a point on a cell the map's scans saw
     # through (each arc's normal line up to free_stop_m short of its foot, a disc around each pose)
     # scores −free_penalty instead of 0
     free_penalty: float = Field(1.0, ge=0)
-    free_stop_m: float = Field(0.3, ge=0)
-    free_pose_radius_m: float = Field(0.5, ge=0)
+    free_stop_m: float = Field(0.3, ge=0, le=10.0)
+    free_pose_radius_m: float = Field(0.5, ge=0, le=10.0)
     # max-pooled pyramid levels of branch and bound: the coarsest cell is 2^levels cells wide
     branch_levels: int = Field(4, ge=1, le=8)
 
@@ -63,19 +63,19 @@ class ScanConfig(_Section):
 class FrontEndConfig(_Section):
     """Scan-to-local-map matching (:mod:`radioslam.slam.front_end`)."""
 
-    local_map_scans: int = Field(10, ge=1)  # the front end matches against this many latest scans
+    local_map_scans: int = Field(10, ge=1, le=1000)  # the front end matches against this many latest scans
     # and against up to this many older scans taken within nearby_radius_m of the last pose
-    nearby_scans: int = Field(20, ge=0)
-    nearby_radius_m: float = Field(3.0, ge=0)
+    nearby_scans: int = Field(20, ge=0, le=1000)
+    nearby_radius_m: float = Field(3.0, ge=0, le=100.0)
     # the response surface (covariance, Olson 2009 §IV) and the final search: ±window around the
     # winner of the wide search (loop closures use twice this window: their winner is coarser)
-    window_m: float = Field(0.15, gt=0)
+    window_m: float = Field(0.15, gt=0, le=5.0)
     window_deg: float = Field(3.0, gt=0)
     angle_step_deg: float = Field(0.5, gt=0)
     # global rotation search: normal-bearing histograms of scan and local map, circularly correlated
     histogram_bin_deg: float = Field(1.0, gt=0)
     histogram_smooth_deg: float = Field(2.0, gt=0)
-    rotation_candidates: int = Field(6, ge=1)  # strongest correlation peaks kept
+    rotation_candidates: int = Field(6, ge=1, le=64)  # strongest correlation peaks kept
     rotation_window_deg: float = Field(2.0, gt=0)  # searched around each candidate and hypothesis
     # a candidate's score is discounted by this fraction times its turn from the nearest motion
     # hypothesis' heading in half turns (a 180° surprise loses it all): the motion prior
@@ -89,7 +89,7 @@ class FrontEndConfig(_Section):
     # loss of up to e^(-1/2) per point): it keeps candidates this much further below the best, and up
     # to refined_candidates of them are refined and scored off the lattice before any decision
     lattice_allowance: float = Field(0.15, ge=0, lt=1)
-    refined_candidates: int = Field(4, ge=1)
+    refined_candidates: int = Field(4, ge=1, le=64)
     # candidates nearer than this in position and heading are one hypothesis (non-maximum suppression)
     distinct_m: float = Field(0.3, gt=0)
     distinct_deg: float = Field(6.0, gt=0)
@@ -111,7 +111,7 @@ class MotionConfig(_Section):
     """The motion model (:mod:`radioslam.slam.motion`): hypotheses, not a window centre."""
 
     # the translation search covers this far from the last pose whatever the turn (steps up to 1 m)
-    max_step_m: float = Field(1.3, gt=0)
+    max_step_m: float = Field(1.3, gt=0, le=20.0)
     # along a weak direction the step is the median length of this many latest straight steps that
     # observed every direction (the walker's pace), not the last step
     pace_scans: int = Field(10, ge=1)
@@ -133,14 +133,14 @@ class MotionConfig(_Section):
 class LoopClosureConfig(_Section):
     """Submaps, loop closure and relocalization (:mod:`radioslam.slam.loop_closer`)."""
 
-    submap_scans: int = Field(7, ge=1)  # consecutive scans per submap (MATLAB lidarSLAM's default)
-    radius_m: float = Field(3.0, gt=0)  # candidate submaps within this distance
+    submap_scans: int = Field(7, ge=1, le=1000)  # consecutive scans per submap (MATLAB lidarSLAM's default)
+    radius_m: float = Field(3.0, gt=0, le=100.0)  # candidate submaps within this distance
     # matched per scan at most (a flat cost however often a place is revisited: every lap adds its submaps
     # to the candidates): never tried ones first, then those whose matchers are kept, each group the one
     # tried longest ago first, then the nearest (Cartographer samples its candidates instead; the round robin
     # keeps every lap's submaps tied in, deterministically, and a submap whose matcher was dropped is built
     # again only when no kept or new one is near)
-    loop_matches_per_scan: int = Field(3, ge=1)
+    loop_matches_per_scan: int = Field(3, ge=1, le=64)
     # a scan within this many scans of the last one that closed a loop (the walk tied to the map) searches
     # only every this many scans (Cartographer samples its constraint searches, a ratio of 0.3); a walk not
     # tied searches at every scan. 1: every scan searches
@@ -155,13 +155,13 @@ class LoopClosureConfig(_Section):
     # at most this many submaps' matchers kept (the least recently used rebuilt when needed again): a submap's
     # grid (and pyramid) covers what its scans saw, and a radio scan sees the whole room: 8–11 MB each in
     # paper-cnv's 16 m room
-    cached_matchers: int = Field(32, ge=1)
-    window_m: float = Field(1.5, gt=0)
+    cached_matchers: int = Field(32, ge=1, le=1024)
+    window_m: float = Field(1.5, gt=0, le=20.0)
     window_deg: float = Field(20.0, gt=0)
     min_score: float = Field(0.35, ge=0, le=1)  # normalized score: mean point likelihood
     # a loop's scan lies where the submap's scans saw the same walls: its arcs overlap theirs, and a
     # long point-to-plane reach (the front end's, for steps up to 1 m) would let it slide along them
-    plane_reach_m: float = Field(0.5, ge=0)
+    plane_reach_m: float = Field(0.5, ge=0, le=10.0)
     # a loop's weight grows smoothly from 0 at min_score to 1 at min_score + score_ramp, and falls
     # smoothly to 0 as its χ² approaches the gate (no cliff where a loop is accepted)
     score_ramp: float = Field(0.10, gt=0)
@@ -170,7 +170,7 @@ class LoopClosureConfig(_Section):
     # as a cross aisle, and keeps the prediction): every submap, full rotation, translation over its extent
     relocalize_after: int = Field(2, ge=1)
     relocalize_min_score: float = Field(0.35, ge=0, le=1)
-    relocalize_margin_m: float = Field(2.0, ge=0)  # beyond the map's points
+    relocalize_margin_m: float = Field(2.0, ge=0, le=100.0)  # beyond the map's points
     relocalize_levels: int = Field(6, ge=1, le=10)  # branch-and-bound levels for a search that wide
     # a matched scan with this fraction of its points on known free space is searched for too, and
     # relocalized where it scores relocalize_gain better than its local match
@@ -268,14 +268,14 @@ class PlaneAdjustmentConfig(_Section):
 class MapConfig(_Section):
     """The occupancy grid and fused cloud written after the run (:mod:`radioslam.slam.occupancy`)."""
 
-    resolution_m: float = Field(0.05, gt=0)
+    resolution_m: float = Field(0.05, ge=0.005, le=1.0)
     log_odds_hit: float = 0.85  # p = 0.7
     log_odds_miss: float = -0.4  # p = 0.4
     log_odds_limit: float = Field(5.0, gt=0)
     # a ray clears free space up to this short of its echo (a beam is ~13° wide: what it saw lies
     # anywhere across it at that range), and never a cell that holds a point of any scan
     free_stop_m: float = Field(0.3, ge=0)
-    margin_m: float = Field(0.5, ge=0)
+    margin_m: float = Field(0.5, ge=0, le=100.0)
 
 
 class SlamConfig(_Section):
