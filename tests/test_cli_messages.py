@@ -26,8 +26,11 @@ def test_a_file_name_is_printed_as_it_is_on_one_line(tmp_path, name):
 @pytest.mark.parametrize("sig, code, word", [(signal.SIGTERM, 143, "terminated"), (signal.SIGINT, 130, "interrupted")])
 def test_a_signal_ends_a_run_in_one_line_leaving_no_temporary_file_and_the_stage_failed(tmp_path, sig, code, word):
     out = tmp_path / "R"
+    # SIGINT as a terminal would deliver it: a shell starting this test in the background ignores it (and
+    # the child would inherit that), so the child gets the default disposition back
     proc = subprocess.Popen([sys.executable, "-m", "radioslam.cli", "demo", "--out", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
     def sensing() -> bool:
         try:
