@@ -184,7 +184,12 @@ def calibrate(
     from radioslam.sensing import estimate_hardware_delay
 
     if captures is None:
+        from radioslam.sim import Simulator
+        from radioslam.sim.memory import check_budget, default_budget
+
         radio = load_scene(scene).radio if scene else RadioConfig()
+        # the empty sweep is every beam at once, as a pose of a walk is
+        check_budget(Simulator.from_radio(radio).memory(), default_budget(), scene or "(default radio)")
         cal = calibrate_simulated(radio, out, seed, targets, spacing)
     else:
         files = _capture_files(captures)
