@@ -6,22 +6,30 @@ import math
 import signal
 import sys
 import warnings
-from collections.abc import Callable
-from functools import wraps
 from pathlib import Path
 from typing import Optional
 
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
+from radioslam.cli_output import (
+    FORCE_HELP,
+    MAX_MEMORY_HELP,
+    RESUME_HELP,
+    TERMINATED,
+    Interrupted,
+    Terminated,
+    err,
+    gib,
+    one_line_errors,
+    out_path,
+    progress,
+    report_warnings,
+    terminate,
+)
 from radioslam.errors import RadioslamError
 
 app = typer.Typer(add_completion=False, invoke_without_command=True, pretty_exceptions_enable=False,
                   rich_markup_mode=None, help="Active mmWave sensing SLAM in 5G NR (arXiv 2507.04662).")
-# user strings (file names, reasons) are never markup or emoji codes (':radio:'), and a line never wraps
-err = Console(stderr=True, highlight=False, emoji=False, markup=False, soft_wrap=True)
-TERMINATED = 143  # 128 + SIGTERM, as a shell reports it
 
 
 def _version(value: bool) -> None:
@@ -42,67 +50,6 @@ def _root(ctx: typer.Context,
         raise typer.Exit()
 
 
-class Interrupted(BaseException):
-    """Ctrl-C during a command (its temporary files are gone and its stage marked failed on the way out)."""
-
-
-class Terminated(BaseException):
-    """SIGTERM, raised where the process is, so that the way out is the same as after Ctrl-C."""
-
-
-def _fail(message: str) -> None:
-    err.print(f"radioslam: error: {message}", markup=False, soft_wrap=True)
-    raise typer.Exit(2)
-
-
-def one_line_errors(command: Callable) -> Callable:
-    """Turn bad input into exit status 2 and one line on stderr: no traceback."""
-
-    @wraps(command)
-    def wrapper(*args, **kwargs):
-        try:
-            return command(*args, **kwargs)
-        except RadioslamError as exc:
-            _fail(exc.one_line())
-        except OSError as exc:
-            _fail(f"{exc.filename or '(file)'}: (file): {exc.strerror or exc}")
-        except KeyboardInterrupt:  # not click's: it would print a blank line first
-            raise Interrupted() from None
-
-    return wrapper
-
-
-def out_path(value: str) -> Path:
-    """An --out path: an empty one would be the working directory, so it is refused."""
-    if not str(value).strip():
-        raise typer.BadParameter("an empty path: name the directory or file to write")
-    return Path(value)
-
-
-class _NoProgress:
-    """What a progress bar does off a terminal: nothing (rich < 13.4 writes a newline even when disabled)."""
-
-    def __enter__(self) -> "_NoProgress":
-        return self
-
-    def __exit__(self, *exc) -> None:
-        return None
-
-    def add_task(self, *args, **kwargs) -> int:
-        return 0
-
-    def advance(self, *args, **kwargs) -> None:
-        return None
-
-
-def progress() -> Progress | _NoProgress:
-    """A progress bar on stderr, shown only on a terminal."""
-    if not sys.stderr.isatty():
-        return _NoProgress()
-    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
-                    console=err, transient=True)
-
-
 @app.command()
 @one_line_errors
 def scenes() -> None:
@@ -111,14 +58,6 @@ def scenes() -> None:
 
     for name, (_, summary) in BUILTIN_SCENES.items():
         typer.echo(f"{name:14s} {summary}")
-
-
-RESUME_HELP = ("go on with an unfinished run of the same scene, seed and settings in --out (killed, or failed): "
-               "the poses it finished, verified by their hashes in run.json, are not done again")
-MAX_MEMORY_HELP = ("GiB one pose may need (estimated before anything is allocated; default: half the machine's "
-                   "memory); beyond it, exit 2 naming the field")
-FORCE_HELP = ("write into a directory that holds other files and no run.json (none of them is removed; "
-              "same-named ones are overwritten)")
 
 
 @app.command()
@@ -157,7 +96,7 @@ def simulate(
                 bar.advance(task)
 
     loaded, run, _ = simulate_stage(scene, out, seed, snr_db, force, captures if save_iq else None,
-                                    _gib(max_memory), resume)
+                                    gib(max_memory), resume)
     err.print(f"wrote {run.root} ({len(loaded.poses)} poses{', IQ captures' if save_iq else ''})",
               markup=False)
 
@@ -290,7 +229,7 @@ def sense(
                 continue
             data = f.with_name(f.name.replace(".sigmf-meta", ".sigmf-data"))
             if data.is_file():  # what sensing it needs, before reading it
-                check_budget(recording_memory(data.stat().st_size), _gib(max_memory) or default_budget(), str(data))
+                check_budget(recording_memory(data.stat().st_size), gib(max_memory) or default_budget(), str(data))
             capture = read_capture(f)
             if capture.pose_index in seen:
                 raise RadioslamError(f"pose {capture.pose_index} again (also in {seen[capture.pose_index].name}): "
@@ -428,10 +367,6 @@ def evaluate(
     _print_metrics(evaluate_stage(run_dir), json_out)
 
 
-def _gib(value: Optional[float]) -> Optional[int]:
-    return None if value is None else int(value * 2**30)
-
-
 def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out: bool, config: Optional[Path] = None,
              odometry: Optional[Path] = None, strict: bool = False, force: bool = False,
              max_memory: Optional[float] = None, resume: bool = False) -> None:
@@ -443,7 +378,7 @@ def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out
     with progress() as bar:
         task = bar.add_task("simulating and sensing", total=poses)
         result, metrics = run_scene(scene, out, seed, snr_db, lambda: bar.advance(task), cfg, odometry,
-                                    _sensing_config(config), force, _gib(max_memory), resume)
+                                    _sensing_config(config), force, gib(max_memory), resume)
     report_stage(out)
     _print_metrics(metrics, json_out)
     err.print(f"wrote {out} (report.html)", markup=False)
@@ -521,10 +456,6 @@ def reproduce(
     err.print(f"wrote {', '.join(names)} to {out}", markup=False)
 
 
-def _terminate(signum, frame) -> None:
-    raise Terminated()
-
-
 def main() -> None:
     """Entry point: usage errors and interrupts end in one line too.
 
@@ -533,12 +464,12 @@ def main() -> None:
     numerical libraries (a log of zero, an empty mean) are counted, not printed line by line.
     """
     command = typer.main.get_command(app)
-    signal.signal(signal.SIGTERM, _terminate)
+    signal.signal(signal.SIGTERM, terminate)
     try:
         with warnings.catch_warnings(record=True) as caught:  # the filters as they are: libraries' deprecations
             code = command.main(prog_name="radioslam", standalone_mode=False)
         if not code:
-            _report_warnings(caught)
+            report_warnings(caught)
     except Terminated:
         err.print("radioslam: terminated (SIGTERM); unfinished stages are marked failed in run.json")
         sys.exit(TERMINATED)
@@ -556,14 +487,6 @@ def main() -> None:
         err.print(f"radioslam: error: {where}{exc.format_message()}", markup=False, soft_wrap=True)
         sys.exit(exc.exit_code)
     sys.exit(code if isinstance(code, int) else 0)
-
-
-def _report_warnings(caught: list) -> None:
-    """One line for the warnings a successful command met (none for an error: that is its one line)."""
-    if caught:
-        first = caught[0]
-        err.print(f"radioslam: note: {len(caught)} warning(s) from the numerical libraries, the first: "
-                  f"{first.category.__name__}: {' '.join(str(first.message).split())}")
 
 
 if __name__ == "__main__":
