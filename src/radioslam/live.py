@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -98,23 +99,16 @@ def follow_stage(out: Path, cfg: SlamConfig | None = None, idle_s: float = 60.0,
     tick = time.perf_counter()
     # a run of ours: this walk's scans replace its sense stage (and what followed it); a recorder's
     # directory without run.json is adopted when the walk ends (its scans, as found)
-    sensing_here = manifest.load() is not None
-    if sensing_here:
-        manifest.begin("sense", {"follow": True, "sensing": (sensing or SensingConfig()).model_dump(mode="json")})
-    try:
-        while (scan := feed.next(len(scans))) is not None:
-            scans.append(scan)
-            update = session.add(scan)
-            if on_update is not None:
-                on_update(update)
-    except KeyboardInterrupt:  # the user ends the walk: what came so far is mapped
-        pass
-    except BaseException as exc:
-        if sensing_here:
-            manifest.fail("sense", f"{type(exc).__name__}: {exc}")
-        raise
-    if sensing_here:
-        manifest.complete("sense")
+    settings = {"follow": True, "sensing": (sensing or SensingConfig()).model_dump(mode="json")}
+    with manifest.stage("sense", settings) if manifest.load() is not None else nullcontext():
+        try:
+            while (scan := feed.next(len(scans))) is not None:
+                scans.append(scan)
+                update = session.add(scan)
+                if on_update is not None:
+                    on_update(update)
+        except KeyboardInterrupt:  # the user ends the walk: what came so far is mapped
+            pass
     if not scans:
         raise RadioslamError(f"no scan (0000.ply) appeared within {idle_s:g} s", file=run.scans, field="(directory)")
     try:

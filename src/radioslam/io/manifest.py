@@ -36,6 +36,7 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 from radioslam.io.atomic import atomic_write_text
 from radioslam.io.errors import ManifestError
 from radioslam.io.json_io import dumps, read_json
+from radioslam.io.rundir import RunDir
 
 MANIFEST = "run.json"
 FORMAT = "radioslam-run/1"
@@ -224,9 +225,9 @@ class RunManifest:
     def record(self, stage: str, paths: Iterable[Path]) -> None:
         """Files the running stage ``stage`` has finished (a pose's scan): a resumed run keeps them."""
         manifest = self._running(stage)
+        run = RunDir(self.root)
         for path in paths:
-            relative = Path(path).relative_to(self.root).as_posix()
-            manifest.stages[stage].outputs[relative] = file_hash(self.root / relative)
+            manifest.stages[stage].outputs[run.relative(path)] = file_hash(Path(path))
         self.save(manifest)
 
     def is_complete(self, stage: str, settings: dict | None = None) -> bool:
@@ -251,7 +252,8 @@ class RunManifest:
         removed those of the run before)."""
         manifest = self._running(stage)
         record = manifest.stages[stage]
-        hashes = {f: file_hash(self.root / f) for f in run_files(self.root)[stage]}
+        # a file :meth:`record` hashed (or a resumed run kept) is final: its hash is not computed again
+        hashes = {f: record.outputs.get(f) or file_hash(self.root / f) for f in run_files(self.root)[stage]}
         record.outputs = {f: h for f, h in hashes.items() if record.foreign.get(f) != h}
         record.foreign = {f: h for f, h in hashes.items() if record.foreign.get(f) == h}
         record.status, record.finished = StageStatus.COMPLETE, _now()
