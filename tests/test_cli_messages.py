@@ -50,3 +50,39 @@ def test_a_signal_ends_a_run_in_one_line_leaving_no_temporary_file_and_the_stage
     sense = json.loads((out / "run.json").read_text())["stages"]["sense"]
     assert sense["status"] == "failed"
     assert "radioslam: error: " in cli("slam", out).stderr  # and the next stage refuses it
+
+
+def _file_size_limit(limit: int):
+    """In the child: writes past ``limit`` bytes fail with EFBIG (a full disk's stand-in), no SIGXFSZ kill."""
+    import resource
+
+    def apply():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    return apply
+
+
+def test_a_write_that_fails_names_the_file_being_written_and_leaves_no_half_written_one(tmp_path):
+    # numpy's tofile says only "N requested and M written", naming no file: the writer names it
+    out = tmp_path / "R"
+    done = subprocess.run([sys.executable, "-m", "radioslam.cli", "simulate", "single-plate:3", "--out", str(out),
+                           "--save-iq"], capture_output=True, text=True, timeout=300,
+                          preexec_fn=_file_size_limit(1_000_000))
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert f"radioslam: error: {out / 'captures' / '0000.sigmf-data'}: (file): " in done.stderr
+    assert not list(out.rglob("*.tmp")) and not list((out / "captures").iterdir())
+    assert json.loads((out / "run.json").read_text())["stages"]["simulate"]["status"] == "failed"
+    refused = cli("sense", out)  # the next stage refuses what is there
+    assert refused.returncode == 2 and refused.stderr.count("\n") == 1
+
+
+def test_an_unreachable_scheduler_is_one_line_naming_its_address(tmp_path):
+    sweep = tmp_path / "sweep.yaml"
+    sweep.write_text("scenes: [single-plate:3]\nseeds: [1]\n")
+    env = {**__import__("os").environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "1s"}
+    done = cli("sweep", sweep, "--out", tmp_path / "S", "--scheduler", "tcp://127.0.0.1:9", env=env)
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert done.stderr.startswith("radioslam: error: tcp://127.0.0.1:9: --scheduler: cannot reach the Dask scheduler")

@@ -43,8 +43,10 @@ def one_line_errors(command: Callable) -> Callable:
             return command(*args, **kwargs)
         except RadioslamError as exc:
             fail(exc.one_line())
-        except OSError as exc:
-            fail(f"{exc.filename or '(file)'}: (file): {exc.strerror or exc}")
+        except OSError as exc:  # every writer and reader names its file (io.atomic); else the reason alone
+            named = exc.filename is not None
+            fail(RadioslamError(exc.strerror or str(exc), file=exc.filename, field="(file)" if named else None)
+                 .one_line())
         except KeyboardInterrupt:  # not click's: it would print a blank line first
             raise Interrupted() from None
 

@@ -1,5 +1,9 @@
 """Write-then-rename, so a file that exists is always complete: the file and its directory are synced
-before and after the rename, so a power cut leaves the old file or the new one, never an empty one."""
+before and after the rename, so a power cut leaves the old file or the new one, never an empty one.
+
+A write that fails (a full disk, a file-size limit, an I/O error) raises an ``OSError`` that names the
+file being written, not its temporary, whatever the writer raised: numpy's ``tofile`` says only
+"N requested and M written", without a file (issue #15: the real file named every time)."""
 
 from __future__ import annotations
 
@@ -18,12 +22,15 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
-        yield Path(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        _sync(tmp)
-        os.replace(tmp, path)
+        try:
+            yield Path(tmp)
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)
+            _sync(tmp)
+            os.replace(tmp, path)
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
         _sync(path.parent)
     finally:
         if os.path.exists(tmp):

@@ -25,7 +25,7 @@ import pandas as pd
 
 from radioslam.io.atomic import atomic_path, atomic_write_text
 from radioslam.io.json_io import dumps
-from radioslam.sweep.spec import RunSpec, SweepSpec
+from radioslam.sweep.spec import RunSpec, SweepError, SweepSpec
 from radioslam.sweep.task import FAILED, run_one
 
 SYNCHRONOUS = "synchronous"
@@ -97,7 +97,12 @@ def _execute(runs: list[RunSpec], out: Path, scheduler: str | None, workers: int
                                                   processes=True, dashboard_address=None,
                                                   silence_logs=logging.ERROR)
     try:
-        with Client(scheduler or cluster) as client:
+        try:
+            client = Client(scheduler or cluster)
+        except OSError as exc:  # no scheduler there (dask's timeout names no file): one line naming the address
+            raise SweepError(f"cannot reach the Dask scheduler: {exc}", file=scheduler or "LocalCluster",
+                             field="--scheduler") from None
+        with client:
             for future in as_completed(client.compute(tasks)):
                 yield future.result()
     finally:
