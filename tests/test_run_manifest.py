@@ -128,17 +128,42 @@ def test_files_are_never_removed_through_a_link_out_of_the_run(tmp_path):
     outside = tmp_path / "elsewhere"
     _write(outside, "0000.sigmf-meta", "precious")
     root = tmp_path / "run"
-    root.mkdir()
-    (root / "captures").symlink_to(outside)
     m = RunManifest(root)
-    m.new_run(seed=0, scene="s", force=True)
-    with m.stage("simulate"):
-        pass
-    doc = json.loads((root / "run.json").read_text())
-    doc["stages"]["simulate"]["outputs"]["captures/0000.sigmf-meta"] = "0" * 64  # as if the run had written it
-    (root / "run.json").write_text(json.dumps(doc))
+    m.new_run(seed=0, scene="s")
+    _stage(m, "simulate", "captures/0000.sigmf-meta")
+    (root / "captures" / "0000.sigmf-meta").unlink()
+    (root / "captures").rmdir()
+    (root / "captures").symlink_to(outside)  # replaced by a link after the run wrote its file there
     m.new_run(seed=1, scene="s")
     assert (outside / "0000.sigmf-meta").read_text() == "precious"
+
+
+@pytest.mark.parametrize("stage, folder", [("simulate", "captures"), ("sense", "scans")])
+def test_a_stage_never_writes_through_a_link_out_of_the_run(tmp_path, stage, folder):
+    outside = tmp_path / "elsewhere"
+    outside.mkdir()
+    root = tmp_path / "run"
+    m = RunManifest(root)
+    m.new_run(seed=0, scene="s")
+    if stage == "sense":
+        _stage(m, "simulate", "scene.yaml")
+    (root / folder).symlink_to(outside)
+    with pytest.raises(ManifestError, match="a symbolic link .*never through a link") as caught:
+        m.begin(stage)
+    assert caught.value.file == str(root / folder) and caught.value.field == "(directory)"
+    assert not list(outside.iterdir())
+
+
+def test_simulate_into_a_run_whose_captures_are_a_link_is_one_line_and_writes_nothing_there(tmp_path):
+    outside = tmp_path / "elsewhere"
+    outside.mkdir()
+    out = tmp_path / "R"
+    out.mkdir()
+    (out / "captures").symlink_to(outside)
+    done = cli("simulate", "single-plate:3", "--out", out, "--save-iq", "--force")
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert f"{out / 'captures'}: (directory): a symbolic link" in done.stderr
+    assert not list(outside.iterdir())
 
 
 def test_a_replacement_killed_between_its_manifest_and_the_removals_is_finished_by_the_next_run(tmp_path):

@@ -10,7 +10,8 @@ three rules:
 - a new run (``simulate``, ``run``, ``demo``) replaces the old one as a whole.
 
 A directory never mixes two runs. Only files a manifest lists are ever removed, and never
-through a symbolic link out of the directory. A directory without ``run.json`` that holds
+through a symbolic link out of the directory; nor is a stage's file written through one (a
+``captures/`` or ``scans/`` that is a link is refused: the run's files stay in the run directory). A directory without ``run.json`` that holds
 recordings or scans from elsewhere is adopted: the files found are recorded as the outputs of
 the stages that would have written them (``source: found``). A new run refuses a directory
 that holds other files, unless forced.
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import platform
 import re
 import sys
@@ -202,6 +204,7 @@ class RunManifest:
         manifest is adopted first (:meth:`adopt`). With ``resume``, the files an unfinished run of this
         stage with the same settings recorded (:meth:`record`) and that still hash as recorded are kept:
         their relative paths are returned, for the stage to skip."""
+        self._no_linked_folders(stage)
         manifest = self.load() or self.adopt(stage)
         index = STAGES.index(stage)
         self._verify(manifest, STAGES[:index], stage)
@@ -320,6 +323,16 @@ class RunManifest:
             if extra:
                 raise ManifestError(f"not part of this run (run.json lists {len(record.outputs)} files of "
                                     f"'{name}')", file=self.root / extra[0], field="(file)")
+
+    def _no_linked_folders(self, stage: str) -> None:
+        """The folders ``stage`` writes its files into are folders of the run directory, not links (to
+        elsewhere: the run's files would be written, and later replaced, outside it)."""
+        for folder in sorted({p.split("/")[0] for p in STAGE_FILES[stage] if "/" in p}):
+            path = self.root / folder
+            if path.is_symlink():
+                raise ManifestError(f"a symbolic link (to {os.readlink(path)}): a run's files are written only inside "
+                                    "the run directory, never through a link; remove the link, or give --out a "
+                                    "directory where the files should go", file=path, field="(directory)")
 
     def _running(self, stage: str) -> Manifest:
         manifest = self.load()
