@@ -62,3 +62,49 @@ def test_slam_maps_a_scan_of_a_million_points_in_bounded_memory():
     assert any(w.startswith("scan 1: 1,000,001 points thinned to ") and "(1 beyond 100 m)" in w
                for w in result.warnings)
     assert np.all(np.isfinite(result.poses))
+
+
+def _corridor_walk(scans: int, spacing_m: float, points: int):
+    """A walk of ``scans`` straight steps along a corridor's walls (y = ±2 m), each scan ``points`` wall
+    points within ±10 m ahead and behind, with specular normals, as the matchers see them."""
+    from radioslam.slam.scan_points import ScanPoints
+
+    x = np.linspace(-10.0, 10.0, points // 2)
+    xy = np.concatenate([np.column_stack([x, np.full_like(x, 2.0)]), np.column_stack([x, np.full_like(x, -2.0)])])
+    normals = np.concatenate([np.full(len(x), np.pi / 2), np.full(len(x), -np.pi / 2)])
+    free = np.column_stack([np.zeros(40), np.linspace(-1.9, 1.9, 40)])
+    estimates = {k: np.array([k * spacing_m, 0.0, 0.0]) for k in range(scans)}
+    return {k: ScanPoints(xy, normals, free) for k in range(scans)}, estimates
+
+
+def test_the_whole_map_grid_stays_bounded_however_long_the_walk():
+    # issue #15: relocalization's whole-map grid covered every scan ever taken: a 600 m walk at 5 cm cells
+    # asked for ≈ 12,000 × 560 cells (≈ 0.8 GB while built); now the square within relocalize_radius_m
+    from radioslam.slam.loop_closer import LoopCloser
+
+    cfg = SlamConfig()
+    closer = LoopCloser.from_config(cfg)
+    scans, estimates = _corridor_walk(300, 2.0, 1024)
+    for k, points in scans.items():
+        closer.add(k, points)
+    keys = list(scans)
+    tracemalloc.start()
+    grid, normals = closer.whole_map(keys, estimates)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    side = 2 * (cfg.loop_closure.relocalize_radius_m + cfg.loop_closure.relocalize_margin_m) / cfg.grid.resolution_m
+    assert grid.values.shape[0] <= side + 2 and peak < 300 * 2**20
+    latest = estimates[keys[-1]][:2]
+    assert np.all(np.abs(grid.origin + cfg.loop_closure.relocalize_margin_m - latest) <= cfg.loop_closure.relocalize_radius_m + 1e-9)
+    # a map within the square is the whole map, cell for cell
+    short = keys[:10]
+    clipped = closer.whole_map(short, estimates)[0]
+    from radioslam.slam.grid import LikelihoodGrid
+    from radioslam.slam.scan_points import fused_free, fused_points
+
+    xy, nrm = fused_points(short, estimates, closer.points, np.zeros(3))
+    g = cfg.grid
+    whole = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, cfg.loop_closure.relocalize_margin_m, nrm,
+                                       np.radians(g.normal_sigma_deg), g.plane_reach_m,
+                                       fused_free(short, estimates, closer.points), g.free_penalty)
+    assert np.array_equal(clipped.fields, whole.fields) and np.array_equal(clipped.origin, whole.origin)

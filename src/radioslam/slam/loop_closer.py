@@ -217,15 +217,33 @@ class LoopCloser:
         return local, refine_pose(grid, points.xy, points.normals, local.pose, grid.resolution, step)
 
     def whole_map(self, keys: list[int], estimates: dict[int, np.ndarray]) -> tuple[LikelihoodGrid, np.ndarray]:
-        """The likelihood field of the scans ``keys`` at their latest poses with the free space they
-        saw (one grid: small submaps, each seen from a few poses, let a wrong place outscore the right
-        one), and the map points' world normals."""
-        g = self.grid_cfg
+        """The likelihood field of the scans ``keys`` (oldest first) at their latest poses with the free space
+        they saw (one grid: small submaps, each seen from a few poses, let a wrong place outscore the right
+        one), and the map points' world normals. Only what lies within ``relocalize_radius_m`` of the
+        latest scan's pose (a square) enters, and all of that scan: a grid of bounded size however long
+        the walk (a map smaller than that square is whole)."""
+        g, radius = self.grid_cfg, self.cfg.relocalize_radius_m
+        centre = estimates[keys[-1]][:2]
+        # the scans that can reach the square (a far one's points cannot), in their order: memory bounded too
+        reach = np.array([self._reach(m) for m in keys])
+        poses = np.array([estimates[m][:2] for m in keys])
+        keys = [m for m, inside in zip(keys, np.max(np.abs(poses - centre), axis=1) <= radius + reach) if inside]
         xy, normals = fused_points(keys, estimates, self.points, np.zeros(3))
+        free = fused_free(keys, estimates, self.points)
+        near = np.max(np.abs(xy - centre), axis=1) <= radius
+        if not near.all():
+            near[len(xy) - len(self.points[keys[-1]]):] = True  # the latest scan's own points: never an empty map
+            xy, normals = xy[near], normals[near]
+            free = free[np.max(np.abs(free - centre), axis=1) <= radius]
         grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, self.cfg.relocalize_margin_m, normals,
-                                          np.radians(g.normal_sigma_deg), g.plane_reach_m,
-                                          fused_free(keys, estimates, self.points), g.free_penalty)
+                                          np.radians(g.normal_sigma_deg), g.plane_reach_m, free, g.free_penalty)
         return grid, normals
+
+    def _reach(self, k: int) -> float:
+        """How far from its pose scan k's points and free samples lie, at most."""
+        points = self.points[k]
+        return float(np.sqrt(max(np.max(np.sum(points.xy**2, axis=1), initial=0.0),
+                                 np.max(np.sum(points.free**2, axis=1), initial=0.0))))
 
     def map_keys(self, k: int, before: int | None = None) -> list[int]:
         """Every scan of the map other than k (and before ``before``)."""
