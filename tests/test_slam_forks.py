@@ -414,9 +414,17 @@ def test_a_weak_match_turned_from_the_prediction_keeps_it_as_a_rival_for_the_map
     fields = ("range_m", "angle_rad", "power_db", "beam", "orientation")
     scans = [Scan(*(recorded[f][end - count:end] for f in fields)) for end, count in zip(ends, recorded["counts"])]
     result = RadioSlam().run(scans)
-    assert result.status[12] is ScanStatus.AMBIGUOUS
-    assert any(w.startswith("scan 12:") and "motion's prediction" in w and "rival taken" in w
-               for w in result.warnings)
+    # The turned weak match is never fused. Which of the two ways it is refused depends on the CPU: the
+    # map's float32 sums are reduced in an order set by the vector width (AVX-512 or AVX2), and scan
+    # 12's best score falls either side of min_score (0.26 on the machine this case was found on, 0.22
+    # on an AVX2 one). Either way the heading holds. Where it lands below, this case does not reach the
+    # weak-match branch; the forks it opens are tested on fixed estimates above.
+    assert result.status[12] in (ScanStatus.AMBIGUOUS, ScanStatus.PREDICTED)
+    if result.status[12] is ScanStatus.AMBIGUOUS:
+        assert any(w.startswith("scan 12:") and "motion's prediction" in w and "rival taken" in w
+                   for w in result.warnings)
+    else:
+        assert any(w.startswith("scan 12: match score") for w in result.warnings)
     assert np.degrees(np.abs(wrap_angle(result.poses[:, 2] - result.poses[0, 2]))).max() < 3.0
     assert ate_rmse(result.poses, case.scene.poses) <= 0.35
 
