@@ -37,6 +37,8 @@ class Case:
     name: str
     setup: Callable[[Path], list[str]]  # builds its inputs in a fresh directory; the command's arguments
     reject: bool = True  # bad input: exit 2 with one line; False: must succeed
+    file_size_limit: int | None = None  # RLIMIT_FSIZE in bytes: a disk that fills mid-write
+    env: dict[str, str] | None = None  # added to the environment
 
 
 def _edit_json(path: Path, change) -> None:
@@ -220,6 +222,15 @@ def cases(one_pose: Path, two_pose: Path) -> list[Case]:
             shutil.copytree(one_pose, d / "r"), _edit_json(d / "r/run.json", lambda m: m["stages"].update(
                 sense={"status": "failed", "started": "t", "error": "boom"})), ["slam", str(d / "r")])[-1]),
         Case("run: a scan edited after sense", _edit_after_sense(two_pose)),
+        Case("run: captures/ a link out of the run", lambda d: (
+            (d / "elsewhere").mkdir(), (d / "o").mkdir(), (d / "o/captures").symlink_to(d / "elsewhere"),
+            ["simulate", "single-plate:3", "--out", str(d / "o"), "--save-iq", "--force"])[-1]),
+        Case("run: the disk fills while writing a capture", lambda d: [
+            "simulate", "single-plate:3", "--out", str(d / "o"), "--save-iq"], file_size_limit=1_000_000),
+        Case("sweep: an unreachable --scheduler", lambda d: (
+            (d / "sweep.yaml").write_text("scenes: [single-plate:3]\nseeds: [1]\n"),
+            ["sweep", str(d / "sweep.yaml"), "--out", str(d / "S"), "--scheduler", "tcp://127.0.0.1:9"])[-1],
+            env={"DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "1s"}),
         Case("good: run the room", lambda d: ["run", str(_scene(d, ROOM)), "--out", str(d / "o")], reject=False),
         Case("good: a second run into the same directory", lambda d: (
             shutil.copytree(two_pose, d / "r"),
@@ -247,10 +258,14 @@ def run_case(case: Case, work: Path, memory_gb: float, timeout: float) -> str:
     def cap() -> None:
         limit = int(memory_gb * 2**30)
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+        if case.file_size_limit is not None:
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # the write fails with EFBIG instead
+            resource.setrlimit(resource.RLIMIT_FSIZE, (case.file_size_limit, case.file_size_limit))
 
     tick = time.monotonic()
     proc = subprocess.Popen([sys.executable, "-m", "radioslam.cli", *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, preexec_fn=cap, cwd=d, start_new_session=True)
+                            stderr=subprocess.PIPE, text=True, preexec_fn=cap, cwd=d, start_new_session=True,
+                            env={**os.environ, **(case.env or {})})
     try:
         _, stderr = proc.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:

@@ -72,6 +72,7 @@ def test_a_write_that_fails_names_the_file_being_written_and_leaves_no_half_writ
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1, done.stderr
     assert f"radioslam: error: {out / 'captures' / '0000.sigmf-data'}: (file): " in done.stderr
+    assert "a short write, the disk full or a file-size limit reached" in done.stderr
     assert not list(out.rglob("*.tmp")) and not list((out / "captures").iterdir())
     assert json.loads((out / "run.json").read_text())["stages"]["simulate"]["status"] == "failed"
     refused = cli("sense", out)  # the next stage refuses what is there

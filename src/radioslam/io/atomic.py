@@ -30,7 +30,9 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
             _sync(tmp)
             os.replace(tmp, path)
         except OSError as exc:
-            raise OSError(exc.errno, exc.strerror or str(exc), str(path)) from None
+            # a writer's short write carries no errno: say what it means
+            reason = exc.strerror or f"a short write, the disk full or a file-size limit reached ({exc})"
+            raise OSError(exc.errno, reason, str(path)) from None
         _sync(path.parent)
     finally:
         if os.path.exists(tmp):

@@ -11,10 +11,10 @@ three rules:
 
 A directory never mixes two runs. Only files a manifest lists are ever removed, and never
 through a symbolic link out of the directory; nor is a stage's file written through one (a
-``captures/`` or ``scans/`` that is a link is refused: the run's files stay in the run directory). A directory without ``run.json`` that holds
-recordings or scans from elsewhere is adopted: the files found are recorded as the outputs of
-the stages that would have written them (``source: found``). A new run refuses a directory
-that holds other files, unless forced.
+``captures/`` or ``scans/`` that is a link is refused: the run's files stay in the run
+directory). A directory without ``run.json`` that holds recordings or scans from elsewhere is
+adopted: the files found are recorded as the outputs of the stages that would have written them
+(``source: found``). A new run refuses a directory that holds other files, unless forced.
 """
 
 from __future__ import annotations
