@@ -257,3 +257,25 @@ def test_an_empty_out_path_and_a_foreign_directory_are_refused(scene_file, tmp_p
     assert cli("simulate", scene_file, "--out", tmp_path / "mine", "--force").returncode == 0
     assert (tmp_path / "mine/thesis.tex").exists() and (tmp_path / "mine/run.json").exists()
     assert os.listdir(tmp_path / "mine")
+
+
+def test_poses_past_9999_are_named_kept_and_read_in_pose_order(tmp_path, monkeypatch):
+    """The schema accepts 100,000 poses: pose 10,000's files are ``10000.*``, belong to their stage, and
+    are read after 9999 (a four-digit pattern dropped them; a name sort put 10000 before 2)."""
+    from radioslam import pipeline
+    from radioslam.io.manifest import stage_of
+    from radioslam.io.rundir import RunDir
+
+    run = RunDir(tmp_path)
+    assert run.scan_file(10_000).name == "10000.ply" and run.scan_file(7).name == "0007.ply"
+    assert run.capture_base(10_000).name == "10000"
+    assert stage_of("scans/10000.ply") == "sense" and stage_of("captures/10000.sigmf-data") == "simulate"
+    assert stage_of("scans/123.ply") is None  # fewer than four digits: not a run's file
+    run.scans.mkdir()
+    for k in range(10_001):
+        run.scan_file(k).touch()
+    monkeypatch.setattr(pipeline, "read_scan", lambda path: int(path.stem))
+    assert pipeline.read_scans(run) == list(range(10_001))
+    run.scan_file(9_999).unlink()
+    with pytest.raises(pipeline.RadioslamError, match="missing scan of a pose"):
+        pipeline.read_scans(run)
