@@ -279,3 +279,32 @@ def test_poses_past_9999_are_named_kept_and_read_in_pose_order(tmp_path, monkeyp
     run.scan_file(9_999).unlink()
     with pytest.raises(pipeline.RadioslamError, match="missing scan of a pose"):
         pipeline.read_scans(run)
+
+
+def test_each_stage_records_the_files_it_read_with_the_hashes_they_had(tmp_path):
+    """run.json's stages.NAME.inputs: the earlier stages' files the stage reads, by relative path, and
+    a file it was given from outside (slam --odometry) by absolute path, each with its SHA-256 as it
+    was when the stage began; simulate's input, the scene, is its settings' scene_sha256."""
+    run = tmp_path / "R"
+    for stage, paths in {"simulate": ["scene.yaml", "ground_truth.tum", "calibration.json",
+                                      "captures/0000.sigmf-meta", "captures/0000.sigmf-data"],
+                         "sense": ["scans/0000.ply", "scans/0000.png"]}.items():
+        manifest = RunManifest(run)
+        if stage == "simulate":
+            manifest.new_run(1, "room")
+        with manifest.stage(stage, {"k": stage}):
+            for p in paths:
+                (run / p).parent.mkdir(parents=True, exist_ok=True)
+                (run / p).write_text(f"{stage} {p}")
+    odometry = tmp_path / "wheels.tum"
+    odometry.write_text("0 0 0 0 0 0 0 1\n")
+    with RunManifest(run).stage("slam", {}, external=[odometry, tmp_path / "missing.tum"]):
+        pass
+    stages = json.loads((run / "run.json").read_text())["stages"]
+    assert stages["simulate"]["inputs"] == {}
+    assert stages["sense"]["inputs"] == {p: file_hash(run / p) for p in
+                                         ["calibration.json", "captures/0000.sigmf-data", "captures/0000.sigmf-meta",
+                                          "ground_truth.tum", "scene.yaml"]}
+    # not the figure, nor the missing file
+    assert stages["slam"]["inputs"] == {"scans/0000.ply": file_hash(run / "scans/0000.ply"),
+                                        str(odometry.resolve()): file_hash(odometry)}

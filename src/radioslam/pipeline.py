@@ -153,7 +153,7 @@ def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = 
     """Trajectories, maps and slam.json from scans/ (and an external odometry TUM file, if given)."""
     run, cfg = RunDir(out), cfg or SlamConfig()
     settings = {"slam": cfg.model_dump(mode="json"), "odometry": None if odometry is None else str(odometry)}
-    with RunManifest(out).stage("slam", settings):
+    with RunManifest(out).stage("slam", settings, external=[odometry] if odometry is not None else []):
         scans = read_scans(run)
         odometry_poses = read_odometry(odometry, len(scans)) if odometry is not None else None
         tick = time.perf_counter()

@@ -52,6 +52,15 @@ STAGE_FILES: dict[str, tuple[str, ...]] = {
     "report": (r"report\.html", r"fig6\.png", r"scan_status\.png"),
 }
 STAGES = tuple(STAGE_FILES)
+# the files of earlier stages each stage reads: recorded with their hashes as its inputs
+_RUN_INPUTS = (r"scene\.yaml", r"ground_truth\.tum", r"calibration\.json", r"odometry\.tum")
+STAGE_INPUTS: dict[str, tuple[str, ...]] = {
+    "simulate": (),  # the scene as given: its hash is in the settings (scene_sha256)
+    "sense": (*_RUN_INPUTS, STAGE_FILES["simulate"][-1]),
+    "slam": (r"scans/\d{4,}\.ply", r"odometry\.tum"),
+    "evaluate": (*_RUN_INPUTS, r"scans/\d{4,}\.ply", *STAGE_FILES["slam"]),
+    "report": (*_RUN_INPUTS, *STAGE_FILES["sense"], *STAGE_FILES["slam"], *STAGE_FILES["evaluate"]),
+}
 _FOLDERS = ("", "captures", "scans")
 _VERSIONED = ("numpy", "scipy", "gtsam", "sigmf", "pydantic", "typer", "rich", "matplotlib", "PyYAML")
 
@@ -77,6 +86,9 @@ class StageRecord(_Model):
     started: str
     finished: str | None = None
     settings: dict = {}
+    # what it read (STAGE_INPUTS: relative paths of earlier stages' files; other files by absolute
+    # path, e.g. slam --odometry) → SHA-256, as verified when it began
+    inputs: dict[str, str] = {}
     outputs: dict[str, str] = {}  # relative path → SHA-256
     # files named as this stage's outputs that were there, unlisted, when it began: not its outputs
     # (unless it wrote them again), never removed
@@ -198,16 +210,21 @@ class RunManifest:
         self.save(manifest)
         return manifest
 
-    def begin(self, stage: str, settings: dict | None = None, resume: bool = False) -> set[str]:
+    def begin(self, stage: str, settings: dict | None = None, resume: bool = False,
+              external: Iterable[Path] = ()) -> set[str]:
         """Stage ``stage`` starts: the stages before it must be complete and their files on disk as
         listed; it and every stage after are invalidated (their files removed). A directory without a
-        manifest is adopted first (:meth:`adopt`). With ``resume``, the files an unfinished run of this
-        stage with the same settings recorded (:meth:`record`) and that still hash as recorded are kept:
-        their relative paths are returned, for the stage to skip."""
+        manifest is adopted first (:meth:`adopt`). The earlier files it reads (``STAGE_INPUTS``) and the
+        ``external`` files it is given are recorded with their hashes as its inputs. With ``resume``,
+        the files an unfinished run of this stage with the same settings recorded (:meth:`record`) and
+        that still hash as recorded are kept: their relative paths are returned, for the stage to skip."""
         self._no_linked_folders(stage)
         manifest = self.load() or self.adopt(stage)
         index = STAGES.index(stage)
-        self._verify(manifest, STAGES[:index], stage)
+        verified = self._verify(manifest, STAGES[:index], stage)
+        inputs = {f: h for f, h in sorted(verified.items()) if any(re.fullmatch(p, f) for p in STAGE_INPUTS[stage])}
+        # a given file that is missing or not a regular one (a FIFO would block) is left to its reader to refuse
+        inputs.update({str(Path(p).resolve()): file_hash(Path(p)) for p in external if Path(p).is_file()})
         settings = _as_stored(settings or {})
         kept = self._resumable(stage, manifest.stages.get(stage), settings) if resume else {}
         later = STAGES[index:]
@@ -216,7 +233,7 @@ class RunManifest:
         for s in later:
             manifest.stages.pop(s, None)
         record = manifest.stages[stage] = StageRecord(status=StageStatus.STARTED, started=_now(),
-                                                      settings=settings, outputs=kept)
+                                                      settings=settings, inputs=inputs, outputs=kept)
         self.save(manifest)
         self._remove(manifest.removing)
         self._remove_temporary(later)
@@ -271,10 +288,11 @@ class RunManifest:
         self.save(manifest)
 
     @contextmanager
-    def stage(self, stage: str, settings: dict | None = None, resume: bool = False) -> Iterator[set[str]]:
+    def stage(self, stage: str, settings: dict | None = None, resume: bool = False,
+              external: Iterable[Path] = ()) -> Iterator[set[str]]:
         """``begin``, the body (given the files a resumed stage kept), then ``complete``; a failure (an
         interrupt too) marks the stage failed and goes on."""
-        kept = self.begin(stage, settings, resume)
+        kept = self.begin(stage, settings, resume, external)
         try:
             yield kept
         except BaseException as exc:
@@ -296,9 +314,10 @@ class RunManifest:
         self.save(manifest)
         return manifest
 
-    def _verify(self, manifest: Manifest, earlier: tuple[str, ...], stage: str) -> None:
-        """Every earlier stage that ran is complete, and the files of each are on disk as listed, no more."""
-        on_disk = run_files(self.root)
+    def _verify(self, manifest: Manifest, earlier: tuple[str, ...], stage: str) -> dict[str, str]:
+        """Every earlier stage that ran is complete, and the files of each are on disk as listed, no more.
+        Returns their hashes, as verified."""
+        on_disk, verified = run_files(self.root), {}
         for name in earlier:
             record = manifest.stages.get(name)
             if record is None:
@@ -319,10 +338,12 @@ class RunManifest:
                 if file_hash(path) != digest:
                     raise ManifestError(f"changed since '{name}' wrote it (SHA-256 differs from run.json)",
                                         file=path, field="(file)")
+                verified[relative] = digest
             extra = sorted(set(on_disk[name]) - set(record.outputs))  # foreign ones included
             if extra:
                 raise ManifestError(f"not part of this run (run.json lists {len(record.outputs)} files of "
                                     f"'{name}')", file=self.root / extra[0], field="(file)")
+        return verified
 
     def _no_linked_folders(self, stage: str) -> None:
         """The folders ``stage`` writes its files into are folders of the run directory, not links (to
