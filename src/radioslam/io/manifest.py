@@ -42,24 +42,25 @@ from radioslam.io.rundir import RunDir
 
 MANIFEST = "run.json"
 FORMAT = "radioslam-run/1"
+# simulate's files besides its captures
+_SIMULATED = (r"scene\.yaml", r"ground_truth\.tum", r"calibration\.json", r"odometry\.tum")
+_CAPTURES, _SCANS = r"captures/\d{4,}\.sigmf-(meta|data)", r"scans/\d{4,}\.ply"
 # each stage's files, as patterns relative to the run directory, in the order the stages run
 STAGE_FILES: dict[str, tuple[str, ...]] = {
-    "simulate": (r"scene\.yaml", r"ground_truth\.tum", r"calibration\.json", r"odometry\.tum",
-                 r"captures/\d{4,}\.sigmf-(meta|data)"),
-    "sense": (r"scans/\d{4,}\.ply", r"scans/\d{4,}\.png"),
+    "simulate": (*_SIMULATED, _CAPTURES),
+    "sense": (_SCANS, r"scans/\d{4,}\.png"),
     "slam": (r"trajectory\.tum", r"trajectory_odometry\.tum", r"map\.pgm", r"map\.yaml", r"map\.ply", r"slam\.json"),
     "evaluate": (r"metrics\.json",),
     "report": (r"report\.html", r"fig6\.png", r"scan_status\.png"),
 }
 STAGES = tuple(STAGE_FILES)
 # the files of earlier stages each stage reads: recorded with their hashes as its inputs
-_RUN_INPUTS = (r"scene\.yaml", r"ground_truth\.tum", r"calibration\.json", r"odometry\.tum")
 STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "simulate": (),  # the scene as given: its hash is in the settings (scene_sha256)
-    "sense": (*_RUN_INPUTS, STAGE_FILES["simulate"][-1]),
-    "slam": (r"scans/\d{4,}\.ply", r"odometry\.tum"),
-    "evaluate": (*_RUN_INPUTS, r"scans/\d{4,}\.ply", *STAGE_FILES["slam"]),
-    "report": (*_RUN_INPUTS, *STAGE_FILES["sense"], *STAGE_FILES["slam"], *STAGE_FILES["evaluate"]),
+    "sense": (*_SIMULATED, _CAPTURES),
+    "slam": (_SCANS, r"odometry\.tum"),
+    "evaluate": (*_SIMULATED, _SCANS, *STAGE_FILES["slam"]),
+    "report": (*_SIMULATED, *STAGE_FILES["sense"], *STAGE_FILES["slam"], *STAGE_FILES["evaluate"]),
 }
 _FOLDERS = ("", "captures", "scans")
 _VERSIONED = ("numpy", "scipy", "gtsam", "sigmf", "pydantic", "typer", "rich", "matplotlib", "PyYAML")

@@ -225,7 +225,7 @@ class LoopCloser:
         g, radius = self.grid_cfg, self.cfg.relocalize_radius_m
         centre = estimates[keys[-1]][:2]
         # the scans that can reach the square (a far one's points cannot), in their order: memory bounded too
-        reach = np.array([self._reach(m) for m in keys])
+        reach = np.array([self.points[m].reach for m in keys])
         poses = np.array([estimates[m][:2] for m in keys])
         keys = [m for m, inside in zip(keys, np.max(np.abs(poses - centre), axis=1) <= radius + reach) if inside]
         xy, normals = fused_points(keys, estimates, self.points, np.zeros(3))
@@ -238,12 +238,6 @@ class LoopCloser:
         grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, self.cfg.relocalize_margin_m, normals,
                                           np.radians(g.normal_sigma_deg), g.plane_reach_m, free, g.free_penalty)
         return grid, normals
-
-    def _reach(self, k: int) -> float:
-        """How far from its pose scan k's points and free samples lie, at most."""
-        points = self.points[k]
-        return float(np.sqrt(max(np.max(np.sum(points.xy**2, axis=1), initial=0.0),
-                                 np.max(np.sum(points.free**2, axis=1), initial=0.0))))
 
     def map_keys(self, k: int, before: int | None = None) -> list[int]:
         """Every scan of the map other than k (and before ``before``)."""

@@ -5,6 +5,7 @@ of the arc each came from (:mod:`radioslam.slam.normals`), and the free space th
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -24,6 +25,12 @@ class ScanPoints:
 
     def __len__(self) -> int:
         return len(self.xy)
+
+    @cached_property
+    def reach(self) -> float:
+        """How far from the terminal its points and free samples lie, at most."""
+        return float(np.sqrt(max(np.max(np.sum(self.xy**2, axis=1), initial=0.0),
+                                 np.max(np.sum(self.free**2, axis=1), initial=0.0))))
 
 
 def prepare_points(scan: Scan, cfg: ScanConfig, grid: GridConfig) -> ScanPoints:
