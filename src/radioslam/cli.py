@@ -11,6 +11,7 @@ from typing import Optional
 
 import typer
 
+from radioslam.choices import ChannelKind
 from radioslam.cli_output import (
     FORCE_HELP,
     MAX_MEMORY_HELP,
@@ -27,6 +28,9 @@ from radioslam.cli_output import (
     terminate,
 )
 from radioslam.errors import RadioslamError
+
+CHANNEL_HELP = ("where the echo paths come from: the built-in 2D caster, or Sionna RT on the scene extruded to 3D "
+                "(extrude: in the scene; pip install 'radioslam[sionna]')")
 
 app = typer.Typer(add_completion=False, invoke_without_command=True, pretty_exceptions_enable=False,
                   rich_markup_mode=None, help="Active mmWave sensing SLAM in 5G NR (arXiv 2507.04662).")
@@ -71,6 +75,7 @@ def simulate(
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     max_memory: Optional[float] = typer.Option(None, "--max-memory", min=0.01, help=MAX_MEMORY_HELP),
     resume: bool = typer.Option(False, "--resume", help=RESUME_HELP),
+    channel: ChannelKind = typer.Option(ChannelKind.BUILTIN, "--channel", help=CHANNEL_HELP),
 ) -> None:
     """Simulate a scene: scene.yaml, ground_truth.tum, calibration.json and, with --save-iq, SigMF captures
     (a new run: whatever run the directory held is replaced)."""
@@ -89,14 +94,14 @@ def simulate(
         done = frozenset(k for k in range(len(loaded.poses)) if recorded(k))
         with progress() as bar:
             task = bar.add_task("simulating", total=len(loaded.poses), completed=len(done))
-            for capture in Simulator.from_scene(loaded).simulate(seed, skip=done):
+            for capture in Simulator.from_scene(loaded, channel=channel).simulate(seed, skip=done):
                 base = run.capture_base(capture.pose_index)
                 write_capture(capture, base)
                 RunManifest(run.root).record("simulate", [data_path(base), meta_path(base)])
                 bar.advance(task)
 
     loaded, run, _ = simulate_stage(scene, out, seed, snr_db, force, captures if save_iq else None,
-                                    gib(max_memory), resume)
+                                    gib(max_memory), resume, channel)
     err.print(f"wrote {run.root} ({len(loaded.poses)} poses{', IQ captures' if save_iq else ''})",
               markup=False)
 
@@ -369,7 +374,8 @@ def evaluate(
 
 def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out: bool, config: Optional[Path] = None,
              odometry: Optional[Path] = None, strict: bool = False, force: bool = False,
-             max_memory: Optional[float] = None, resume: bool = False) -> None:
+             max_memory: Optional[float] = None, resume: bool = False,
+             channel: ChannelKind = ChannelKind.BUILTIN) -> None:
     from radioslam.pipeline import report_stage, run_scene
     from radioslam.scene import load_scene
 
@@ -378,7 +384,7 @@ def _run_all(scene: str, out: Path, seed: int, snr_db: Optional[float], json_out
     with progress() as bar:
         task = bar.add_task("simulating and sensing", total=poses)
         result, metrics = run_scene(scene, out, seed, snr_db, lambda: bar.advance(task), cfg, odometry,
-                                    _sensing_config(config), force, gib(max_memory), resume)
+                                    _sensing_config(config), force, gib(max_memory), resume, channel)
     report_stage(out)
     _print_metrics(metrics, json_out)
     err.print(f"wrote {out} (report.html)", markup=False)
@@ -400,10 +406,11 @@ def run(
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     max_memory: Optional[float] = typer.Option(None, "--max-memory", min=0.01, help=MAX_MEMORY_HELP),
     resume: bool = typer.Option(False, "--resume", help=RESUME_HELP),
+    channel: ChannelKind = typer.Option(ChannelKind.BUILTIN, "--channel", help=CHANNEL_HELP),
 ) -> None:
     """simulate → sense → slam → evaluate on any scene, and write report.html (a new run: whatever run the
     directory held is replaced)."""
-    _run_all(scene, out, seed, snr_db, json_out, config, odometry, strict, force, max_memory, resume)
+    _run_all(scene, out, seed, snr_db, json_out, config, odometry, strict, force, max_memory, resume, channel)
 
 
 @app.command()
@@ -416,10 +423,11 @@ def demo(
     force: bool = typer.Option(False, "--force", help=FORCE_HELP),
     max_memory: Optional[float] = typer.Option(None, "--max-memory", min=0.01, help=MAX_MEMORY_HELP),
     resume: bool = typer.Option(False, "--resume", help=RESUME_HELP),
+    channel: ChannelKind = typer.Option(ChannelKind.BUILTIN, "--channel", help=CHANNEL_HELP),
 ) -> None:
     """The paper's Fig. 6 simulation end to end: paper-cnv, 60 poses, SNR 10 dB, waveform IQ."""
     _run_all("paper-cnv", out, seed, None, json_out, strict=strict, force=force, max_memory=max_memory,
-             resume=resume)
+             resume=resume, channel=channel)
 
 
 @app.command()

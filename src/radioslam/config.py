@@ -119,6 +119,8 @@ class RadioConfig(BaseModel):
     # TX→RX isolation, mean over the beams: leakage ≈ the 5 m reference echo
     isolation_db: float = Field(70.0, ge=0.0, le=400.0)
     array_baseline_m: float = Field(0.05, ge=0, le=1.0)  # TX/RX array centre spacing
+    # the terminal's height above the floor (the middle between its two arrays): what a 3D channel sees
+    height_m: float = Field(1.5, gt=0, le=1000.0)
     # the coupling path's delay beyond b/c (feed lines, a reflection inside the housing): the receiver
     # does not assume it, it measures the leakage's delay per beam at calibration
     leakage_excess_delay_s: float = Field(0.0, ge=-5e-9, le=5e-9)

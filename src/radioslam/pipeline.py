@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from radioslam.choices import ChannelKind
 from radioslam.errors import RadioslamError
 from radioslam.eval.map_metrics import map_coverage, map_error
 from radioslam.eval.ranging import beam_half_width_rad, robust_rmse, specular_range_errors
@@ -31,6 +32,7 @@ from radioslam.sensing import Receiver, SensingConfig, estimate_hardware_delay
 from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import Simulator
 from radioslam.sim.calibration_targets import calibration_ranges, simulate_calibration
+from radioslam.sim.channel_backend import check_channel
 from radioslam.sim.memory import check_budget, default_budget
 from radioslam.sim.odometry import odometry_rng, simulated_odometry
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, SlamResult
@@ -69,7 +71,7 @@ def write_json(path: Path, doc: dict) -> None:
 
 def simulate_stage(scene_name: str, out: Path, seed: int, snr_db: float | None, force: bool = False,
                    captures: Callable[[Scene, RunDir, set[str]], None] | None = None, max_memory: int | None = None,
-                   resume: bool = False):
+                   resume: bool = False, channel: ChannelKind = ChannelKind.BUILTIN):
     """A new run in ``out`` (the old one there replaced whole, run.json): scene.yaml, ground_truth.tum and
     calibration.json (eq. (11) on plates simulated with this scene's radio), and what ``captures`` writes
     (given the files a resumed run kept); the scene, the run directory and the calibration. With
@@ -77,11 +79,13 @@ def simulate_stage(scene_name: str, out: Path, seed: int, snr_db: float | None, 
     scene = load_scene(scene_name).with_radio(snr_db=snr_db)
     # what one pose needs, and the calibration's empty sweep (every beam too), before anything is written
     check_budget(Simulator.from_scene(scene).memory(), max_memory or default_budget(), scene_name)
+    check_channel(channel, scene, scene_name)
     run, manifest = RunDir(out), RunManifest(out)
     manifest.new_run(seed, scene_name, force, resume)
     scene_text = scene_to_yaml(scene)
     settings = {"scene": scene_name, "scene_sha256": hashlib.sha256(scene_text.encode()).hexdigest(), "seed": seed,
-                "snr_db": snr_db, "save_iq": captures is not None, "radio": scene.radio.model_dump(mode="json")}
+                "snr_db": snr_db, "save_iq": captures is not None, "radio": scene.radio.model_dump(mode="json"),
+                "channel": ChannelKind(channel).value}
     if resume and manifest.is_complete("simulate", settings):
         return scene, run, read_calibration(run.calibration)
     with manifest.stage("simulate", settings, resume) as kept:
@@ -104,13 +108,15 @@ def sensing_settings(sensing: SensingConfig | None, cal, calibration: Path) -> d
 
 def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None,
                        sensing: SensingConfig | None = None, force: bool = False,
-                       max_memory: int | None = None, resume: bool = False) -> dict:
+                       max_memory: int | None = None, resume: bool = False,
+                       channel: ChannelKind = ChannelKind.BUILTIN) -> dict:
     """The files of :func:`simulate_stage` and scans/ (IQ sensed in memory, by a receiver set by
     ``sensing``); stage seconds. With ``resume``, the poses whose scans an unfinished run of the same
     settings wrote (and recorded) are not simulated again."""
     timings = {}
     tick = time.perf_counter()
-    scene, run, cal = simulate_stage(scene_name, out, seed, snr_db, force, max_memory=max_memory, resume=resume)
+    scene, run, cal = simulate_stage(scene_name, out, seed, snr_db, force, max_memory=max_memory, resume=resume,
+                                     channel=channel)
     timings["calibrate"] = time.perf_counter() - tick
     receiver, manifest = Receiver(scene.radio, cal.hardware_delay_s, sensing, cal.leakage), RunManifest(out)
     simulate_s = sense_s = 0.0
@@ -119,7 +125,7 @@ def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | No
         for _ in done:
             if advance:
                 advance()
-        captures = Simulator.from_scene(scene).simulate(seed, skip=done)
+        captures = Simulator.from_scene(scene, channel=channel).simulate(seed, skip=done)
         for _ in range(len(scene.poses) - len(done)):
             tick = time.perf_counter()
             capture = next(captures)
@@ -216,13 +222,14 @@ def read_odometry(path: Path, scans: int) -> np.ndarray:
 def run_scene(scene_name: str, out: Path, seed: int, snr_db: float | None, advance=None,
               cfg: SlamConfig | None = None, odometry: Path | None = None,
               sensing: SensingConfig | None = None, force: bool = False,
-              max_memory: int | None = None, resume: bool = False) -> tuple[SlamResult, dict]:
+              max_memory: int | None = None, resume: bool = False,
+              channel: ChannelKind = ChannelKind.BUILTIN) -> tuple[SlamResult, dict]:
     """Simulate and sense, SLAM, evaluate: a whole run directory; the SLAM result and metrics."""
     simulated = odometry is not None and str(odometry) == SIMULATED_ODOMETRY
     if simulated and load_scene(scene_name).spec.odometry is None:
         raise RadioslamError("the scene has no odometry: block to simulate one from", file=scene_name,
                              field="odometry")
-    timings = simulate_and_sense(scene_name, out, seed, snr_db, advance, sensing, force, max_memory, resume)
+    timings = simulate_and_sense(scene_name, out, seed, snr_db, advance, sensing, force, max_memory, resume, channel)
     result = slam_stage(out, cfg, timings, RunDir(out).odometry if simulated else odometry)
     return result, evaluate_stage(out)
 

@@ -77,6 +77,7 @@ def build_scene(spec: SceneSpec, source: str | None = None) -> Scene:
         wall_of += [w] * (len(pts) - 1)
         material_of += [names.index(wall.material)] * (len(pts) - 1)
     seg = np.concatenate(segments)
+    _check_extrusion(spec, names, source)
     poses = trajectory_poses(spec.trajectory)
     dist = point_segment_distance(poses[:, :2], seg)
     near = np.argwhere(dist < MIN_WALL_CLEARANCE_M)
@@ -89,3 +90,19 @@ def build_scene(spec: SceneSpec, source: str | None = None) -> Scene:
             file=source, field=f"{where}[{p}]" if spec.trajectory.poses is not None else where)
     return Scene(spec, seg, np.array(wall_of), np.array(material_of),
                  tuple(materials[n] for n in names), names, poses)
+
+
+def _check_extrusion(spec: SceneSpec, names: tuple[str, ...], source: str | None) -> None:
+    """An extruded scene's floor and ceiling materials are known, and both arrays lie between them."""
+    if spec.extrude is None:
+        return
+    for key in ("floor", "ceiling"):
+        material = getattr(spec.extrude, key)
+        if material is not None and material not in names:
+            raise SceneError(f"unknown material '{material}' (known: {', '.join(names)})", file=source,
+                             field=f"extrude.{key}")
+    radio, height = spec.radio, spec.extrude.height_m
+    low, high = radio.height_m - radio.array_baseline_m / 2, radio.height_m + radio.array_baseline_m / 2
+    if not 0.0 < low <= high < height:
+        raise SceneError(f"the arrays span {low:.3f}–{high:.3f} m, not inside the walls' 0–{height:g} m",
+                         file=source, field="radio.height_m")

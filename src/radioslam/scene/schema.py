@@ -12,6 +12,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from radioslam.config import RadioConfig
+from radioslam.scene.materials import ItuMaterial
 
 # a scene is a building, not a continent: every length and grid stays bounded (issue #15)
 EXTENT_M = 10_000.0
@@ -30,6 +31,8 @@ class MaterialSpec(_Strict):
     scattering: float = Field(ge=0.0, le=1.0)
     directivity: float = Field(ge=0.0, le=100.0)
     transmission: float = Field(0.0, ge=0.0, le=1.0)
+    itu: ItuMaterial | None = None  # the ITU-R P.2040 class a ray tracer with ITU materials uses (Sionna RT)
+    thickness_m: float = Field(0.1, gt=0.0, le=10.0)  # the slab's thickness there
 
     @model_validator(mode="after")
     def _energy(self) -> "MaterialSpec":
@@ -87,6 +90,15 @@ class OdometrySpec(_Strict):
     heading_bias_deg: float = Field(0.0, ge=-30.0, le=30.0)
 
 
+class ExtrudeSpec(_Strict):
+    """The 2D walls as vertical walls from the floor (z = 0) to ``height_m``, with an optional floor and
+    ceiling (materials; absent: none) spanning the walls' bounding box (issue #16 ★)."""
+
+    height_m: float = Field(gt=0.0, le=1000.0)
+    floor: str | None = None
+    ceiling: str | None = None
+
+
 class SceneSpec(_Strict):
     version: Literal[1]
     name: str = Field(min_length=1)
@@ -95,6 +107,7 @@ class SceneSpec(_Strict):
     trajectory: TrajectorySpec
     radio: RadioConfig = Field(default_factory=RadioConfig)
     odometry: OdometrySpec | None = None  # optional: the simulator also writes a drifting odometry
+    extrude: ExtrudeSpec | None = None  # optional: the walls in 3D (a height, a floor, a ceiling)
 
     @model_validator(mode="after")
     def _segment_count(self) -> "SceneSpec":

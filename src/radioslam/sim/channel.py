@@ -22,10 +22,13 @@ def delay_phasors(delays_s: np.ndarray, subcarriers: np.ndarray, spacing_hz: flo
 
 
 def beam_path_gains(beams: BeamSet, paths: EchoPaths) -> np.ndarray:
-    """Complex gain ϖ_{i,k}·b_k of every path on every beam, shape (B, P); the leakage's ϖ is the
-    beam's TX→RX coupling (:meth:`~radioslam.antenna.codebook.BeamSet.coupling`)."""
+    """Complex gain ϖ_{i,k}·b_k of every path on every beam, shape (B, P) (a backend's own ``beam_gain``
+    where it gives one); the leakage's ϖ is the beam's TX→RX coupling
+    (:meth:`~radioslam.antenna.codebook.BeamSet.coupling`)."""
     leak = paths.kind == PathKind.LEAKAGE
-    gain = beams.two_way_gain(np.where(leak, 0.0, paths.angle)) * paths.amplitude  # leakage angle NaN: overwritten
+    # the leakage's angle is NaN: its column is overwritten below
+    gain = (beams.two_way_gain(np.where(leak, 0.0, paths.angle)) if paths.beam_gain is None
+            else paths.beam_gain.astype(np.complex128)) * paths.amplitude
     gain[:, leak] = beams.coupling()[:, None] * paths.amplitude[leak]
     return gain
 

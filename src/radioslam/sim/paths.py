@@ -47,6 +47,9 @@ class EchoPaths:
     kind: np.ndarray
     segment: np.ndarray  # −1 for leakage
     point: np.ndarray  # (P, 2) world coordinates of the echo point, NaN for leakage
+    # (B, P) each path's gain on each beam where a backend computed it from its own element coefficients
+    # (Sionna RT, :mod:`radioslam.sim.sionna_channel`); None: the codebook's gain at ``angle``
+    beam_gain: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.delay_s)
@@ -55,7 +58,8 @@ class EchoPaths:
         """The same paths, shortest delay first (ties keep their order)."""
         order = np.argsort(self.delay_s, kind="stable")
         return EchoPaths(self.delay_s[order], self.amplitude[order], self.angle[order], self.kind[order],
-                         self.segment[order], self.point[order])
+                         self.segment[order], self.point[order],
+                         None if self.beam_gain is None else self.beam_gain[:, order])
 
 
 def _echo(r, gain_wo_range, radio: RadioConfig):
@@ -123,12 +127,13 @@ def echo_paths(scene: Scene, pose: np.ndarray, radio: RadioConfig | None = None,
     parts = [diffuse_paths(scene, pose, radio), specular]
     kinds = [np.full(len(p[0]), k) for p, k in zip(parts, (PathKind.DIFFUSE, PathKind.SPECULAR))]
     if leakage and np.isfinite(radio.isolation_db):
-        parts.append(_leakage(radio))
+        parts.append(leakage_path(radio))
         kinds.append(np.array([PathKind.LEAKAGE]))
     return _joined(parts, kinds)
 
 
-def _leakage(radio: RadioConfig):
+def leakage_path(radio: RadioConfig):
+    """(delay, amplitude, angle, segment, point) of the TX→RX leakage."""
     return (np.array([radio.array_baseline_m / SPEED_OF_LIGHT + radio.leakage_excess_delay_s]),
             np.array([10.0 ** (-radio.isolation_db / 20.0) * radio.impairments.leakage_drift]), np.array([np.nan]),
             np.array([-1]), np.full((1, 2), np.nan))
@@ -141,4 +146,4 @@ def _joined(parts, kinds) -> EchoPaths:
 
 def leakage_paths(radio: RadioConfig) -> EchoPaths:
     """The leakage alone: a capture with nothing in range, what its calibration measures."""
-    return _joined([_leakage(radio)], [np.array([PathKind.LEAKAGE])])
+    return _joined([leakage_path(radio)], [np.array([PathKind.LEAKAGE])])

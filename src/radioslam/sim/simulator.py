@@ -14,6 +14,7 @@ from threadpoolctl import ThreadpoolController
 
 from radioslam.antenna.codebook import BeamSet
 from radioslam.capture import Capture, CaptureMode
+from radioslam.choices import ChannelKind
 from radioslam.config import SPEED_OF_LIGHT, DataMode, RadioConfig
 from radioslam.nr.frame import FrameSchedule
 from radioslam.nr.numerology import Numerology
@@ -21,11 +22,12 @@ from radioslam.nr.pss import pss_grid
 from radioslam.nr.qam import qam16_modulate, random_bits
 from radioslam.scene.model import Scene
 from radioslam.sim.channel import beam_path_gains, binned_channel_response
+from radioslam.sim.channel_backend import ChannelBackend, make_channel
 from radioslam.sim.errors import SimulationError
 from radioslam.sim.impairments import receiver_chain, transmitter_chain
 from radioslam.sim.memory import MemoryEstimate, pose_memory
 from radioslam.sim.noise import add_noise, noise_variance
-from radioslam.sim.paths import EchoPaths, echo_paths
+from radioslam.sim.paths import EchoPaths
 from radioslam.sim.phase_noise import OscillatorPhases
 from radioslam.sim.waveform import BurstSymbols, synthesize_windows
 
@@ -71,15 +73,17 @@ class Simulator:
     window_symbols: np.ndarray  # (B, 1 + R) absolute symbol indices, the same at every pose
     window_cp: np.ndarray  # (B, 1 + R) their CP lengths
     pss_symbol: np.ndarray  # (n_sc,) the PSS on the active subcarriers
+    channel: ChannelBackend | None = None  # where a scene's echo paths come from (None: no scene)
 
     @classmethod
     def from_scene(cls, scene: Scene, mode: CaptureMode = CaptureMode.WAVEFORM,
-                   rows: np.ndarray | None = None) -> "Simulator":
-        return cls.from_radio(scene.radio, mode, scene, rows)
+                   rows: np.ndarray | None = None, channel: ChannelKind = ChannelKind.BUILTIN) -> "Simulator":
+        return cls.from_radio(scene.radio, mode, scene, rows, channel)
 
     @classmethod
     def from_radio(cls, radio: RadioConfig, mode: CaptureMode = CaptureMode.WAVEFORM,
-                   scene: Scene | None = None, rows: np.ndarray | None = None) -> "Simulator":
+                   scene: Scene | None = None, rows: np.ndarray | None = None,
+                   channel: ChannelKind = ChannelKind.BUILTIN) -> "Simulator":
         num = Numerology.from_config(radio)
         schedule = FrameSchedule.from_config(radio)
         beams = BeamSet.from_config(radio)
@@ -93,7 +97,9 @@ class Simulator:
         window = int((all_cp + num.fft_size).sum(axis=1).max()
                      + np.ceil(longest_delay * num.sample_rate_hz) + WINDOW_GUARD_SAMPLES)
         pss = pss_grid(radio.pss, radio.n_id2, num.subcarrier_indices())
-        return cls(scene, radio, mode, num, schedule, beams, rows, noise_variance(radio), window, symbols, cp, pss)
+        backend = None if scene is None else make_channel(channel, scene, radio)
+        return cls(scene, radio, mode, num, schedule, beams, rows, noise_variance(radio), window, symbols, cp, pss,
+                   backend)
 
     def memory(self) -> MemoryEstimate:
         """What simulating one pose needs, before anything is allocated (:mod:`radioslam.sim.memory`)."""
@@ -105,8 +111,8 @@ class Simulator:
         return int(np.floor(self.radio.hardware_delay_s * self.numerology.sample_rate_hz))
 
     def simulate_pose(self, pose_index: int, rng: np.random.Generator) -> Capture:
-        # 1. echo paths of this pose by ray casting (delays without the hardware delay)
-        paths = echo_paths(self.scene, self.scene.poses[pose_index], self.radio)
+        # 1. echo paths of this pose from the channel backend (delays without the hardware delay)
+        paths = self.channel.paths(self.scene.poses[pose_index])
         return self.capture_from_paths(paths, rng, pose_index)
 
     def capture_from_paths(self, paths: EchoPaths, rng: np.random.Generator, pose_index: int = 0) -> Capture:

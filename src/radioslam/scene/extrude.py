@@ -1,0 +1,65 @@
+"""A 2D scene as a 3D triangle mesh (issue #16): every wall segment a vertical rectangle from the floor
+(z = 0) to ``extrude.height_m``, and the floor and ceiling, when named, rectangles over the walls'
+bounding box. What a ray tracer of meshes (Sionna RT, via :mod:`radioslam.io.mitsuba`) takes.
+
+Each rectangle is two triangles; a face's material is its wall's. Normals are left to the tracer
+(walls reflect from either side).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from radioslam.scene.errors import SceneError
+from radioslam.scene.model import Scene
+
+
+@dataclass(frozen=True)
+class Mesh:
+    """Triangles (F, 3) into vertices (V, 3), each face's material (F,) (index into ``material_names``)."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    face_material: np.ndarray
+    material_names: tuple[str, ...]
+
+    def area(self) -> np.ndarray:
+        """Area (F,) of each face."""
+        a, b, c = (self.vertices[self.faces[:, k]] for k in range(3))
+        return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+
+    def of_material(self, m: int) -> "Mesh":
+        """The faces of material m alone, with only the vertices they use."""
+        faces = self.faces[self.face_material == m]
+        used, inverse = np.unique(faces, return_inverse=True)
+        return Mesh(self.vertices[used], inverse.reshape(faces.shape), np.full(len(faces), m), self.material_names)
+
+
+def _rectangles(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (4R, 3) and faces (2R, 3) of rectangles given by their corners (R, 4, 3) in order."""
+    vertices = corners.reshape(-1, 3)
+    base = 4 * np.arange(len(corners))[:, None]
+    faces = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(-1, 3)
+    return vertices, faces
+
+
+def extruded_mesh(scene: Scene) -> Mesh:
+    """The scene's walls, floor and ceiling (``scene.spec.extrude``) as one mesh."""
+    spec = scene.spec.extrude
+    if spec is None:
+        raise SceneError("a 3D channel needs the walls' height: add extrude: {height_m: ...}", field="extrude")
+    height, seg = spec.height_m, scene.segments
+    low, high = np.zeros((len(seg), 2, 1)), np.full((len(seg), 2, 1), height)
+    # a, b at the floor, then b, a at the top
+    walls = np.concatenate([np.concatenate([seg, low], axis=2), np.concatenate([seg[:, ::-1], high], axis=2)], axis=1)
+    corners, materials = [walls], [scene.segment_material]
+    (x0, y0), (x1, y1) = seg.reshape(-1, 2).min(axis=0), seg.reshape(-1, 2).max(axis=0)
+    for name, z in ((spec.floor, 0.0), (spec.ceiling, height)):
+        if name is not None:
+            corners.append(np.array([[[x0, y0, z], [x1, y0, z], [x1, y1, z], [x0, y1, z]]]))
+            materials.append(np.array([scene.material_names.index(name)]))
+    vertices, faces = _rectangles(np.concatenate(corners))
+    face_material = np.repeat(np.concatenate(materials), 2)
+    return Mesh(vertices, faces, face_material, scene.material_names)

@@ -1,0 +1,206 @@
+"""Sionna RT as the channel backend (issue #16; paper §IV-A: "a 3D model in Blender, imported into the
+Sionna ray-tracing software"): the echo paths of a pose ray traced by Sionna RT (Hoydis et al., "Sionna
+RT: differentiable ray tracing for radio propagation modeling", 2023) in a 3D scene, then beamformed by
+our codebook and sent through our waveform synthesis and receiver unchanged.
+
+The scene is our YAML scene extruded (:mod:`radioslam.scene.extrude`), each material its ITU-R P.2040
+class (:class:`~radioslam.scene.materials.ItuMaterial`) with our scattering S as the scattering
+coefficient and our directivity as the directive lobe's α_R (Degli-Esposti et al. 2007, the model both
+use). The terminal, at ``radio.height_m``, carries one TX and one RX array per orientation, b/2 above and
+below that height (the stacked arrays of :mod:`radioslam.sim.paths`), each a horizontal row of N
+isotropic elements at λ/2, turned to the orientation's normal. TX and RX are co-located, so there is no
+line of sight (``los=False``): the TX→RX leakage is ours, as with the built-in caster. Delays are
+absolute (``normalize_delays=False``).
+
+Per path p and orientation k Sionna gives the baseband coefficients A_p[m, n] from TX element n to RX
+element m (``cir``). The beam's gain is then (eq. (4), ϖ·b):
+
+    g_{i,p} = w̃_i^H A_p w̃_i^* · e(ψ_t)·e(ψ_r) · c(ε_t)·c(ε_r),
+
+w̃_i our DFT weights in Sionna's element order (our element n at −n·d along the row: Sionna's element
+N − 1 − n), e(ψ) = cos^{q/2} ψ the element pattern off the array normal (``element_exponent`` q, zero
+behind), and c(ε) = |Σ_r e^{jπ r sin ε}|/N the elevation factor of the 8×8 array's N rows fed alike
+(1 in the horizontal plane, so a wall at the terminal's height sees today's beams). With
+``synthetic_array`` (default) Sionna traces from each array's centre and applies the elements' phases
+as plane waves (exact in the far field, beyond 2D²/λ ≈ 0.26 m here); without it every element pair is
+traced (spherical wavefronts, 64× the paths).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from radioslam.antenna.codebook import BeamSet
+from radioslam.config import RadioConfig
+from radioslam.scene.extrude import Mesh, extruded_mesh
+from radioslam.scene.model import Scene
+from radioslam.sim.errors import SimulationError
+from radioslam.sim.paths import EchoPaths, PathKind, leakage_path
+
+INSTALL_HINT = ("pip install 'radioslam[sionna]', and an LLVM for Dr.Jit's CPU backend (Debian: apt install "
+                "libllvm19; DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1)")
+DIFFUSE_FLAG = 2  # sionna.rt.constants.InteractionType.DIFFUSE
+
+
+@dataclass(frozen=True)
+class SionnaOptions:
+    """How Sionna RT traces: reflections up to ``max_depth``, diffuse scattering with ``samples`` rays per
+    source (the monostatic terminal sees a wall off its normal only through them), the seed of its
+    sampling."""
+
+    max_depth: int = 2
+    diffuse: bool = True
+    samples: int = 200_000
+    synthetic_array: bool = True
+    seed: int = 1
+
+
+def import_sionna():
+    """sionna.rt, mitsuba and drjit, or a one-line SimulationError saying how to install them."""
+    if "DRJIT_LIBLLVM_PATH" not in os.environ:
+        for candidate in ("/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1", "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"):
+            if os.path.exists(candidate):
+                os.environ["DRJIT_LIBLLVM_PATH"] = candidate
+                break
+    try:
+        import drjit as dr
+        import mitsuba as mi
+        import sionna.rt as rt
+    except Exception as exc:  # ImportError, or Dr.Jit's own when no LLVM is found
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise SimulationError(f"the sionna channel needs Sionna RT: {INSTALL_HINT} ({reason})",
+                              field="--channel") from None
+    return rt, mi, dr
+
+
+def beam_gains(beams: BeamSet, coefficients: np.ndarray, orientation: int) -> np.ndarray:
+    """g (B, P) of paths whose baseband coefficients (P, N_rx, N_tx) were traced with the arrays of
+    ``orientation``: w̃^H A w̃^* on that orientation's beams, 0 on the others."""
+    w = beams.weights()[:, ::-1]  # our element n at −n·d: Sionna's element N − 1 − n
+    gains = np.zeros((len(beams), coefficients.shape[0]), dtype=np.complex128)
+    rows = np.flatnonzero(beams.orientation == orientation)
+    gains[rows] = np.einsum("bm,pmn,bn->bp", w[rows].conj(), coefficients, w[rows].conj())
+    return gains
+
+
+def elevation_factor(elevation: np.ndarray, rows: int) -> np.ndarray:
+    """|Σ_r e^{jπ r sin ε}|/N of N rows at λ/2 fed alike: 1 at ε = 0."""
+    phase = np.pi * np.sin(elevation)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.abs(np.sin(rows * phase / 2) / (rows * np.sin(phase / 2)))
+    return np.where(np.abs(np.sin(phase / 2)) < 1e-12, 1.0, ratio)
+
+
+def element_factor(azimuth: np.ndarray, elevation: np.ndarray, exponent: float) -> np.ndarray:
+    """cos^{q/2} ψ of the angle ψ off the array normal (amplitude, one way), 0 behind the array."""
+    cos_psi = np.cos(elevation) * np.cos(azimuth)
+    return np.where(cos_psi > 0, np.abs(cos_psi) ** (exponent / 2), 0.0)
+
+
+def check_scene(scene: Scene) -> Mesh:
+    """The scene's 3D mesh, every material of it with an ITU-R P.2040 class (else a one-line error)."""
+    mesh = extruded_mesh(scene)
+    for m in np.unique(mesh.face_material):
+        if scene.materials[m].itu is None:
+            name = scene.material_names[m]
+            raise SimulationError(f"material '{name}' names no ITU-R P.2040 class (itu:) for the sionna channel",
+                                  field=f"materials.{name}.itu")
+    return mesh
+
+
+class SionnaChannel:
+    """Echo paths of a scene's poses from Sionna RT (built once per scene)."""
+
+    def __init__(self, scene: Scene, radio: RadioConfig, options: SionnaOptions = SionnaOptions()):
+        self.rt, self.mi, self.dr = import_sionna()
+        self.radio, self.options, self.beams = radio, options, BeamSet.from_config(radio)
+        self.scene = self._sionna_scene(scene, check_scene(scene))
+        self.solver = self.rt.PathSolver()
+
+    def _sionna_scene(self, scene: Scene, mesh: Mesh):
+        rt, mi, radio = self.rt, self.mi, self.radio
+        out = rt.load_scene()
+        objects = []
+        for m in np.unique(mesh.face_material):
+            material, name = scene.materials[m], scene.material_names[m]
+            radio_material = rt.ITURadioMaterial(f"mat-{name}", material.itu.value, thickness=material.thickness_m,
+                                                 scattering_coefficient=material.scattering)
+            radio_material.scattering_pattern = rt.DirectivePattern(alpha_r=max(1, int(round(material.directivity))))
+            part = mesh.of_material(int(m))
+            shape = mi.Mesh(f"mesh-{name}", vertex_count=len(part.vertices), face_count=len(part.faces),
+                            has_vertex_normals=False, has_vertex_texcoords=False)
+            params = mi.traverse(shape)
+            params["vertex_positions"] = mi.Float(part.vertices.astype(np.float32).ravel())
+            params["faces"] = mi.UInt32(part.faces.astype(np.uint32).ravel())
+            params.update()
+            objects.append(rt.SceneObject(mi_mesh=shape, name=f"walls-{name}", radio_material=radio_material))
+        out.edit(add=objects)
+        out.frequency = radio.carrier_hz
+        array = dict(num_rows=1, num_cols=radio.array_elements, vertical_spacing=0.5, horizontal_spacing=0.5,
+                     pattern="iso", polarization="V")
+        out.tx_array, out.rx_array = rt.PlanarArray(**array), rt.PlanarArray(**array)
+        for k in range(radio.orientations):
+            out.add(rt.Transmitter(f"tx{k}", position=[0.0, 0.0, radio.height_m]))
+            out.add(rt.Receiver(f"rx{k}", position=[0.0, 0.0, radio.height_m]))
+        return out
+
+    def _place(self, pose: np.ndarray) -> None:
+        radio, half = self.radio, self.radio.array_baseline_m / 2
+        for k in range(radio.orientations):
+            yaw = float(pose[2] + k * 2 * np.pi / radio.orientations)
+            self.scene.get(f"tx{k}").position = self.mi.Point3f(float(pose[0]), float(pose[1]), radio.height_m + half)
+            self.scene.get(f"rx{k}").position = self.mi.Point3f(float(pose[0]), float(pose[1]), radio.height_m - half)
+            for name in (f"tx{k}", f"rx{k}"):
+                self.scene.get(name).orientation = self.mi.Point3f(yaw, 0.0, 0.0)
+
+    def trace(self, pose: np.ndarray):
+        """Sionna's paths of the terminal at ``pose`` (x, y, θ)."""
+        self._place(np.asarray(pose, dtype=np.float64))
+        o = self.options
+        return self.solver(self.scene, max_depth=o.max_depth, samples_per_src=o.samples, los=False,
+                           synthetic_array=o.synthetic_array, specular_reflection=True,
+                           diffuse_reflection=o.diffuse, refraction=True, seed=o.seed)
+
+    def paths(self, pose: np.ndarray, leakage: bool = True) -> EchoPaths:
+        """Every echo path of the terminal at ``pose``, with its gain on every beam (``beam_gain``)."""
+        pose = np.asarray(pose, dtype=np.float64)
+        traced = self.trace(pose)
+        # baseband coefficients (rx, rx_ant, tx, tx_ant, paths), absolute delays
+        a = np.asarray(traced.cir(normalize_delays=False, out_type="numpy")[0])[..., 0]
+        tau = np.asarray(traced.tau.numpy())
+        angles = [np.asarray(x.numpy()) for x in (traced.theta_t, traced.phi_t, traced.theta_r, traced.phi_r)]
+        kinds = np.asarray(traced.interactions.numpy())  # (depth, rx, tx, paths) (synthetic)
+        vertices = np.asarray(traced.vertices.numpy())  # (depth, rx, tx, paths, 3)
+        parts = [self._orientation_paths(pose, k, a[k, :, k], tau, angles, kinds, vertices)
+                 for k in range(self.radio.orientations)]
+        if leakage and np.isfinite(self.radio.isolation_db):  # its gain is the arrays' coupling (beam_path_gains)
+            parts.append((*leakage_path(self.radio), np.zeros((len(self.beams), 1), dtype=np.complex128),
+                          np.array([PathKind.LEAKAGE])))
+        delay, amplitude, angle, segment, point, gains, kind = zip(*parts)
+        return EchoPaths(np.concatenate(delay), np.concatenate(amplitude).astype(np.complex128), np.concatenate(angle),
+                         np.concatenate(kind).astype(np.int8), np.concatenate(segment), np.concatenate(point),
+                         beam_gain=np.concatenate(gains, axis=1))
+
+    def _orientation_paths(self, pose, k, coefficients, tau, angles, kinds, vertices):
+        """(delay, amplitude, angle, segment, point, beam gains, kind) of the paths traced for orientation k;
+        ``coefficients`` (rx_ant, tx_ant, paths)."""
+        theta_t, phi_t, theta_r, phi_r = (x[k, k] for x in angles)  # synthetic: (paths,)
+        delay = tau[k, k]
+        valid = (delay > 0) & np.any(coefficients != 0, axis=(0, 1))
+        coefficients = np.moveaxis(coefficients[..., valid], -1, 0)  # (P, rx_ant, tx_ant)
+        yaw = pose[2] + k * 2 * np.pi / self.radio.orientations
+        q, rows = self.radio.element_exponent, self.radio.array_elements
+        factor = np.ones(int(valid.sum()))
+        for theta, phi in ((theta_t[valid], phi_t[valid]), (theta_r[valid], phi_r[valid])):
+            elevation = np.pi / 2 - theta
+            factor *= element_factor(phi - yaw, elevation, q) * elevation_factor(elevation, rows)
+        gains = beam_gains(self.beams, coefficients, k) * factor
+        first = vertices[0, k, k][valid]  # the first bounce: where the echo comes from
+        diffuse = np.any((kinds[:, k, k][:, valid] & DIFFUSE_FLAG) != 0, axis=0)
+        kind = np.where(diffuse, PathKind.DIFFUSE, PathKind.SPECULAR)
+        angle = np.angle(np.exp(1j * (phi_t[valid] - pose[2])))
+        return (delay[valid].astype(np.float64), np.ones(len(kind), dtype=np.complex128), angle,
+                np.full(len(kind), -1), first[:, :2].astype(np.float64), gains, kind)
