@@ -150,3 +150,83 @@ def test_sionna_matches_the_caster_on_a_plate(yaw):
     level = {kind: 20 * np.log10(np.abs(gains[kind][rows, strongest[kind][rows]])) for kind in paths}
     np.testing.assert_allclose(level["sionna"], level["builtin"], atol=0.5)
     assert np.argmax(np.abs(gains["sionna"]).max(axis=1)) == np.argmax(np.abs(gains["builtin"]).max(axis=1))
+
+
+def _write_mitsuba(folder, height=3.0):
+    """A Mitsuba scene of the extruded ROOM (one PLY per material), as Sionna's Blender export writes it."""
+    from plyfile import PlyData, PlyElement
+
+    scene = scene_from_mapping({**ROOM, "extrude": {"height_m": height, "floor": "concrete"}})
+    mesh = extruded_mesh(scene)
+    (folder / "meshes").mkdir()
+    shapes, bsdfs = [], []
+    for m in np.unique(mesh.face_material):
+        part, name = mesh.of_material(int(m)), scene.material_names[m]
+        vertex = np.array([tuple(v) for v in part.vertices], dtype=[("x", "f4"), ("y", "f4"), ("z", "f4")])
+        face = np.array([(list(f),) for f in part.faces], dtype=[("vertex_indices", "i4", (3,))])
+        PlyData([PlyElement.describe(vertex, "vertex"), PlyElement.describe(face, "face")]).write(
+            str(folder / "meshes" / f"{name}.ply"))
+        itu = scene.materials[m].itu.value
+        bsdfs.append(f'<bsdf type="twosided" id="mat-itu_{itu}"><bsdf type="principled"/></bsdf>')
+        shapes.append(f'<shape type="ply" id="{name}"><string name="filename" value="meshes/{name}.ply"/>'
+                      f'<ref id="mat-itu_{itu}" name="bsdf"/></shape>')
+    (folder / "room.xml").write_text(f'<scene version="2.1.0">{"".join(bsdfs)}{"".join(shapes)}</scene>')
+    return scene
+
+
+def test_mitsuba_scene_is_sliced_at_the_terminals_height(tmp_path):
+    """A Mitsuba scene's walls in 2D are its mesh cut at radio.height_m: the extruded room's own segments
+    (each wall cut as its two triangles, so every segment lies on a true wall, and they cover its length);
+    the floor does not cross that height. The scene file's folder resolves the XML."""
+    walled = _write_mitsuba(tmp_path)
+    (tmp_path / "room.yaml").write_text("version: 1\nname: room-xml\nmitsuba: room.xml\n"
+                                        "trajectory: {poses: [[0, 0, 0]]}\n")
+    from radioslam.scene import load_scene_file
+
+    scene = load_scene_file(tmp_path / "room.yaml")
+    assert scene.spec.mitsuba == str((tmp_path / "room.xml").resolve())
+    from radioslam.scene.geometry import point_segment_distance
+
+    assert len(scene.segments) == len(walled.segments)  # a wall's two triangles joined into one segment again
+    ends = scene.segments.reshape(-1, 2)
+    assert point_segment_distance(ends, walled.segments).min(axis=1).max() < 1e-5
+    lengths = lambda seg: np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1).sum()  # noqa: E731
+    assert lengths(scene.segments) == pytest.approx(lengths(walled.segments), rel=1e-6)
+    assert {scene.materials[m].itu.value for m in scene.segment_material} == {"concrete", "metal"}
+    # the built-in caster runs on the slice: the same specular echoes as the 2D room
+    ours = Simulator.from_scene(scene).channel.paths(scene.poses[0])
+    theirs = echo_paths(walled, walled.poses[0], walled.radio)
+    spec = lambda p: np.sort(p.delay_s[p.kind == PathKind.SPECULAR])  # noqa: E731
+    np.testing.assert_allclose(spec(ours)[:4], spec(theirs)[:4], atol=1e-14)
+
+
+@pytest.mark.parametrize("xml, reason", [
+    ("<scene><shape type='obj' id='a'/></scene>", "only ply meshes"),
+    ("<scene><bsdf type='itu-radio-material' id='m'><string name='type' value='lava'/></bsdf></scene>",
+     "unknown ITU material type"),
+    ("<scene><bsdf type='twosided' id='mat-itu_lava'/></scene>", "unknown ITU material type"),
+    ("<scene><shape type='ply' id='a'><string name='filename' value='x.ply'/></shape></scene>", "needs a filename"),
+    ("<scene", "not XML"),
+])
+def test_bad_mitsuba_scene_is_one_error(tmp_path, xml, reason):
+    (tmp_path / "bad.xml").write_text(xml)
+    with pytest.raises(SceneError) as info:
+        scene_from_mapping({"version": 1, "name": "x", "mitsuba": str(tmp_path / "bad.xml"),
+                            "trajectory": {"poses": [[0, 0, 0]]}})
+    assert reason in info.value.reason and str(tmp_path / "bad.xml") in info.value.one_line()
+
+
+@pytest.mark.skipif(not _sionna_available(), reason="needs Sionna RT and an LLVM (pip install 'radioslam[sionna]')")
+def test_sionna_reads_the_mitsuba_scene_as_the_extruded_one(tmp_path):
+    """The same room as a Mitsuba file and as an extruded YAML scene: Sionna's specular echoes agree."""
+    walled = _write_mitsuba(tmp_path)
+    from_xml = scene_from_mapping({"version": 1, "name": "x", "mitsuba": str(tmp_path / "room.xml"),
+                                   "trajectory": {"poses": [[0.5, 0.2, 0.4]]}})
+    extruded = scene_from_mapping({**ROOM, "extrude": walled.spec.extrude.model_dump(),
+                                   "trajectory": {"poses": [[0.5, 0.2, 0.4]]}})
+    delays = []
+    for scene in (from_xml, extruded):
+        paths = Simulator.from_scene(scene, channel="sionna").channel.paths(scene.poses[0], leakage=False)
+        delays.append(np.unique(np.round(paths.delay_s[paths.kind == PathKind.SPECULAR] * C, 6)))
+    assert len(delays[0]) >= 4
+    np.testing.assert_array_equal(delays[0], delays[1])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from pydantic import ValidationError
@@ -13,6 +14,7 @@ from radioslam.nr.numerology import NumerologyError
 from radioslam.scene.errors import SceneError, validation_error
 from radioslam.scene.geometry import point_segment_distance
 from radioslam.scene.materials import BUILTIN_MATERIALS, Material
+from radioslam.scene.mitsuba import horizontal_slice, read_mitsuba
 from radioslam.scene.schema import SceneSpec
 from radioslam.scene.trajectory import trajectory_poses
 
@@ -63,6 +65,8 @@ def build_scene(spec: SceneSpec, source: str | None = None) -> Scene:
         raise SceneError(str(exc), file=source, field="radio") from None
     materials = dict(BUILTIN_MATERIALS)
     materials.update({name: Material(**m.model_dump()) for name, m in spec.materials.items()})
+    if spec.mitsuba is not None:
+        return _mitsuba_scene(spec, materials, source)
     names = tuple(materials)
     segments, wall_of, material_of = [], [], []
     for w, wall in enumerate(spec.walls):
@@ -78,18 +82,47 @@ def build_scene(spec: SceneSpec, source: str | None = None) -> Scene:
         material_of += [names.index(wall.material)] * (len(pts) - 1)
     seg = np.concatenate(segments)
     _check_extrusion(spec, names, source)
+    return _with_poses(spec, seg, np.array(wall_of), np.array(material_of), materials, names, source)
+
+
+def _mitsuba_scene(spec: SceneSpec, materials: dict[str, Material], source: str | None) -> Scene:
+    """A scene of a Mitsuba XML file (resolved against the scene file's folder and kept absolute, so that
+    a run's scene.yaml finds it): its walls are the mesh's slice at the terminal's height, each bsdf a
+    material of its ITU class (a built-in material of that class lends the 2D caster its parameters)."""
+    path = Path(spec.mitsuba)
+    if not path.is_absolute() and source is not None and Path(source).exists():
+        path = Path(source).resolve().parent / path
+    mesh, itu = read_mitsuba(path)
+    spec = spec.model_copy(update={"mitsuba": str(path.resolve())})
+    segments, face_material = horizontal_slice(mesh, spec.radio.height_m)
+    if not len(segments):
+        raise SceneError(f"no wall crosses the terminal's height {spec.radio.height_m:g} m", file=str(path),
+                         field="radio.height_m")
+    by_class = {m.itu: m for m in BUILTIN_MATERIALS.values()}
+    for name, (cls, thickness) in itu.items():
+        model = by_class.get(cls, BUILTIN_MATERIALS["concrete"])
+        materials[name] = Material(model.reflectivity, model.scattering, model.directivity, model.transmission, cls,
+                                   thickness)
+    names = tuple(materials)
+    material_of = np.array([names.index(mesh.material_names[m]) for m in face_material])
+    return _with_poses(spec, segments, np.arange(len(segments)), material_of, materials, names, source)
+
+
+def _with_poses(spec, seg, wall_of, material_of, materials, names, source) -> Scene:
+    """The scene of these segments, once every pose keeps its distance from them."""
     poses = trajectory_poses(spec.trajectory)
     dist = point_segment_distance(poses[:, :2], seg)
     near = np.argwhere(dist < MIN_WALL_CLEARANCE_M)
     if len(near):
         p, s = near[0]
         where = "trajectory.poses" if spec.trajectory.poses is not None else "trajectory.circle"
+        wall = f"walls[{wall_of[s]}]" if spec.walls is not None else f"the mitsuba scene's wall {s}"
         raise SceneError(
             f"pose {p} at ({poses[p, 0]:.3f}, {poses[p, 1]:.3f}) is {dist[p, s]:.3f} m from "
-            f"walls[{wall_of[s]}], closer than {MIN_WALL_CLEARANCE_M} m",
+            f"{wall}, closer than {MIN_WALL_CLEARANCE_M} m",
             file=source, field=f"{where}[{p}]" if spec.trajectory.poses is not None else where)
-    return Scene(spec, seg, np.array(wall_of), np.array(material_of),
-                 tuple(materials[n] for n in names), names, poses)
+    return Scene(spec, seg, np.asarray(wall_of), np.asarray(material_of), tuple(materials[n] for n in names), names,
+                 poses)
 
 
 def _check_extrusion(spec: SceneSpec, names: tuple[str, ...], source: str | None) -> None:

@@ -103,7 +103,8 @@ class SceneSpec(_Strict):
     version: Literal[1]
     name: str = Field(min_length=1)
     materials: dict[str, MaterialSpec] = Field(default_factory=dict)
-    walls: list[WallSpec] = Field(min_length=1)
+    walls: list[WallSpec] | None = Field(None, min_length=1)
+    mitsuba: str | None = Field(None, min_length=1)  # a Mitsuba XML scene (Sionna's), instead of walls (issue #16 ★)
     trajectory: TrajectorySpec
     radio: RadioConfig = Field(default_factory=RadioConfig)
     odometry: OdometrySpec | None = None  # optional: the simulator also writes a drifting odometry
@@ -111,7 +112,11 @@ class SceneSpec(_Strict):
 
     @model_validator(mode="after")
     def _segment_count(self) -> "SceneSpec":
-        segments = sum(len(w.points) - 1 for w in self.walls)
+        if (self.walls is None) == (self.mitsuba is None):
+            raise ValueError("give exactly one of 'walls' or 'mitsuba'")
+        if self.mitsuba is not None and self.extrude is not None:
+            raise ValueError("a mitsuba scene is 3D already: 'extrude' is for walls")
+        segments = sum(len(w.points) - 1 for w in self.walls or [])
         if segments > MAX_SEGMENTS:
             raise ValueError(f"{segments:,} wall segments: at most {MAX_SEGMENTS:,}")
         return self

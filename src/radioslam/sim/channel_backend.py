@@ -12,7 +12,9 @@ import numpy as np
 from radioslam.choices import ChannelKind
 from radioslam.config import RadioConfig
 from radioslam.errors import RadioslamError
+from radioslam.scene.materials import BUILTIN_MATERIALS
 from radioslam.scene.model import Scene
+from radioslam.sim.errors import SimulationError
 from radioslam.sim.paths import EchoPaths, echo_paths
 
 
@@ -26,6 +28,7 @@ class BuiltinChannel:
     """The built-in 2D caster: diffuse rays, image-source (or facet) speculars, leakage."""
 
     def __init__(self, scene: Scene, radio: RadioConfig):
+        check_channel(ChannelKind.BUILTIN, scene)
         self.scene, self.radio = scene, radio
 
     def paths(self, pose: np.ndarray, leakage: bool = True) -> EchoPaths:
@@ -47,6 +50,13 @@ def check_channel(kind: ChannelKind, scene: Scene, source: str | None = None) ->
     """Before anything is written: the backend of ``kind`` can run on ``scene`` (Sionna RT installed, the
     scene extruded, every material with an ITU class), or a one-line error naming what is missing (and
     the scene file, ``source``)."""
+    if ChannelKind(kind) is ChannelKind.BUILTIN and scene.spec.mitsuba is not None:
+        modelled = {m.itu for m in BUILTIN_MATERIALS.values()}
+        unknown = sorted({scene.materials[m].itu.value for m in np.unique(scene.segment_material)} -
+                         {c.value for c in modelled})
+        if unknown:
+            raise SimulationError(f"the built-in caster has no 2D model of ITU class(es) {', '.join(unknown)} in the "
+                                  "mitsuba scene: run --channel sionna", file=source, field="--channel")
     if ChannelKind(kind) is ChannelKind.SIONNA:
         from radioslam.sim.sionna_channel import check_scene, import_sionna
 

@@ -35,7 +35,8 @@ import numpy as np
 
 from radioslam.antenna.codebook import BeamSet
 from radioslam.config import RadioConfig
-from radioslam.scene.extrude import Mesh, extruded_mesh
+from radioslam.scene.extrude import extruded_mesh
+from radioslam.scene.mesh import Mesh
 from radioslam.scene.model import Scene
 from radioslam.sim.errors import SimulationError
 from radioslam.sim.paths import EchoPaths, PathKind, leakage_path
@@ -100,8 +101,11 @@ def element_factor(azimuth: np.ndarray, elevation: np.ndarray, exponent: float) 
     return np.where(cos_psi > 0, np.abs(cos_psi) ** (exponent / 2), 0.0)
 
 
-def check_scene(scene: Scene) -> Mesh:
-    """The scene's 3D mesh, every material of it with an ITU-R P.2040 class (else a one-line error)."""
+def check_scene(scene: Scene) -> Mesh | None:
+    """The scene's 3D mesh, every material of it with an ITU-R P.2040 class (else a one-line error);
+    None for a Mitsuba scene (Sionna reads it as it is)."""
+    if scene.spec.mitsuba is not None:
+        return None
     mesh = extruded_mesh(scene)
     for m in np.unique(mesh.face_material):
         if scene.materials[m].itu is None:
@@ -120,8 +124,21 @@ class SionnaChannel:
         self.scene = self._sionna_scene(scene, check_scene(scene))
         self.solver = self.rt.PathSolver()
 
-    def _sionna_scene(self, scene: Scene, mesh: Mesh):
-        rt, mi, radio = self.rt, self.mi, self.radio
+    def _sionna_scene(self, scene: Scene, mesh: Mesh | None):
+        rt, radio = self.rt, self.radio
+        out = rt.load_scene(scene.spec.mitsuba) if mesh is None else self._extruded_scene(scene, mesh)
+        out.frequency = radio.carrier_hz
+        array = dict(num_rows=1, num_cols=radio.array_elements, vertical_spacing=0.5, horizontal_spacing=0.5,
+                     pattern="iso", polarization="V")
+        out.tx_array, out.rx_array = rt.PlanarArray(**array), rt.PlanarArray(**array)
+        for k in range(radio.orientations):
+            out.add(rt.Transmitter(f"tx{k}", position=[0.0, 0.0, radio.height_m]))
+            out.add(rt.Receiver(f"rx{k}", position=[0.0, 0.0, radio.height_m]))
+        return out
+
+    def _extruded_scene(self, scene: Scene, mesh: Mesh):
+        """Sionna's scene of our extruded mesh, one object per material."""
+        rt, mi = self.rt, self.mi
         out = rt.load_scene()
         objects = []
         for m in np.unique(mesh.face_material):
@@ -138,13 +155,6 @@ class SionnaChannel:
             params.update()
             objects.append(rt.SceneObject(mi_mesh=shape, name=f"walls-{name}", radio_material=radio_material))
         out.edit(add=objects)
-        out.frequency = radio.carrier_hz
-        array = dict(num_rows=1, num_cols=radio.array_elements, vertical_spacing=0.5, horizontal_spacing=0.5,
-                     pattern="iso", polarization="V")
-        out.tx_array, out.rx_array = rt.PlanarArray(**array), rt.PlanarArray(**array)
-        for k in range(radio.orientations):
-            out.add(rt.Transmitter(f"tx{k}", position=[0.0, 0.0, radio.height_m]))
-            out.add(rt.Receiver(f"rx{k}", position=[0.0, 0.0, radio.height_m]))
         return out
 
     def _place(self, pose: np.ndarray) -> None:
