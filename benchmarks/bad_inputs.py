@@ -32,6 +32,14 @@ trajectory:
 """
 
 
+XML_ROOM = """version: 1
+name: room-xml
+mitsuba: room.xml
+trajectory:
+  poses: [[0, 0, 0]]
+"""
+
+
 @dataclass
 class Case:
     name: str
@@ -160,6 +168,17 @@ def cases(one_pose: Path, two_pose: Path) -> list[Case]:
             "[[-4, -3], [4, -3], [4, 3], [-4, 3], [-4, -3]]", "[" + ", ".join(
                 f"[{-4 + 8 * i / 10000:.5f}, -3]" for i in range(10001)) + ", [4, 3], [-4, 3], [-4, -3]]"))),
             "--out", str(d / "o")], reject=False),
+        Case("mitsuba: missing file", lambda d: ["simulate", str(_scene(d, XML_ROOM)), "--out", str(d / "o")]),
+        Case("mitsuba: not XML", lambda d: ((d / "room.xml").write_text("<scene"),
+                                            ["simulate", str(_scene(d, XML_ROOM)), "--out", str(d / "o")])[1]),
+        Case("mitsuba: a mesh file missing", lambda d: ((d / "room.xml").write_text(
+            '<scene><bsdf type="twosided" id="mat-itu_concrete"/><shape type="ply" id="w"><string name="filename" '
+            'value="none.ply"/><ref id="mat-itu_concrete"/></shape></scene>'),
+            ["simulate", str(_scene(d, XML_ROOM)), "--out", str(d / "o")])[1]),
+        Case("cli: --channel sionna, walls without a height", lambda d: ["simulate", str(_scene(d, ROOM)), "--out",
+                                                                         str(d / "o"), "--channel", "sionna"]),
+        Case("cli: --channel warp", lambda d: ["simulate", str(_scene(d, ROOM)), "--out", str(d / "o"),
+                                               "--channel", "warp"]),
         Case("radio: fft_size 2^24", _radio("fft_size: 16777216")),
         Case("radio: frames 10000", _radio("frames: 10000")),
         Case("radio: array_elements 1e6", _radio("array_elements: 1000000")),

@@ -18,6 +18,8 @@ def scene_from_mapping(data: object, source: str | None = None) -> Scene:
     if not isinstance(data, dict):
         raise SceneError(f"the document must be a mapping, got {type(data).__name__}",
                          file=source, field="(top level)")
+    if "walls" not in data and "mitsuba" not in data:  # walls, unless a Mitsuba scene stands in for them
+        raise SceneError("required key is missing (or mitsuba: a Mitsuba XML scene)", file=source, field="walls")
     try:
         spec = SceneSpec.model_validate(data)
     except ValidationError as exc:
