@@ -230,3 +230,24 @@ def test_sionna_reads_the_mitsuba_scene_as_the_extruded_one(tmp_path):
         delays.append(np.unique(np.round(paths.delay_s[paths.kind == PathKind.SPECULAR] * C, 6)))
     assert len(delays[0]) >= 4
     np.testing.assert_array_equal(delays[0], delays[1])
+
+
+@pytest.mark.skipif(not _sionna_available(), reason="needs Sionna RT and an LLVM (pip install 'radioslam[sionna]')")
+def test_run_on_the_sionna_channel_end_to_end(tmp_path):
+    """`radioslam run --channel sionna` on an extruded room: scans, a trajectory and metrics, the channel
+    in run.json."""
+    import json
+
+    scene = tmp_path / "room.yaml"
+    scene.write_text("version: 1\nname: room\nwalls:\n  - {points: [[-4, -3], [5, -3], [5, 3], [-4, 3], [-4, -3]], "
+                     "material: concrete}\n  - {points: [[1, 1], [2, 2]], material: metal}\ntrajectory: "
+                     "{poses: [[0, 0, 0], [0.3, 0, 0.05], [0.6, 0.1, 0.1]]}\nextrude: {height_m: 3.0}\n")
+    out = tmp_path / "run"
+    done = subprocess.run([sys.executable, "-m", "radioslam.cli", "run", str(scene), "--out", str(out), "--channel",
+                           "sionna", "--json"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    metrics = json.loads(done.stdout)
+    assert metrics["poses"] == 3 and metrics["ate_rmse_m"] < 0.1
+    manifest = json.loads((out / "run.json").read_text())
+    assert manifest["stages"]["simulate"]["settings"]["channel"] == "sionna"
+    assert len(list((out / "scans").glob("*.ply"))) == 3
