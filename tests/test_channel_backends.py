@@ -251,3 +251,36 @@ def test_run_on_the_sionna_channel_end_to_end(tmp_path):
     manifest = json.loads((out / "run.json").read_text())
     assert manifest["stages"]["simulate"]["settings"]["channel"] == "sionna"
     assert len(list((out / "scans").glob("*.ply"))) == 3
+
+
+def test_collinear_pieces_join_and_corners_stay():
+    """A wall cut into three pieces, met in any order, is one segment again; a corner's two walls and two
+    materials on one line stay apart."""
+    from radioslam.scene.mitsuba import merge_collinear
+
+    pieces = np.array([[[1.0, 0], [2, 0]], [[0, 0], [1, 0]], [[2, 2], [2, 0]], [[3, 0], [2, 0]], [[3, 0], [4, 0]]])
+    material = np.array([0, 0, 0, 0, 1])
+    segments, kept = merge_collinear(pieces, material)
+    assert len(segments) == 3
+    joined = segments[np.argmax(np.linalg.norm(segments[:, 1] - segments[:, 0], axis=1))]
+    np.testing.assert_allclose(sorted(joined[:, 0]), [0.0, 3.0])
+    assert sorted(kept.tolist()) == [0, 0, 1]
+
+
+def test_a_memory_estimate_builds_no_channel(tmp_path):
+    """A Mitsuba scene with a class the caster lacks: the memory estimate runs whatever the channel (no
+    backend is built for it), the built-in caster refuses in one line naming the scene, and Sionna is
+    not refused by the caster's check."""
+    from radioslam.sim.channel_backend import check_channel
+
+    _write_mitsuba(tmp_path)
+    xml = (tmp_path / "room.xml").read_text().replace("mat-itu_concrete", "mat-itu_brick")
+    (tmp_path / "room.xml").write_text(xml)
+    scene = scene_from_mapping({"version": 1, "name": "x", "mitsuba": str(tmp_path / "room.xml"),
+                                "trajectory": {"poses": [[0, 0, 0]]}})
+    assert Simulator.from_scene(scene, channel="sionna").memory().total > 0
+    from radioslam.sim.errors import SimulationError
+
+    with pytest.raises(SimulationError) as info:
+        check_channel("builtin", scene, "room.yaml")
+    assert info.value.file == "room.yaml" and "brick" in info.value.reason

@@ -80,3 +80,6 @@ BUILTIN_MATERIALS: dict[str, Material] = {
     "wood": Material(0.17, 0.30, 3.0, 0.60, ItuMaterial.WOOD, 0.04),
     "drywall": Material(0.25, 0.30, 3.0, 0.80, ItuMaterial.PLASTERBOARD, 0.0125),
 }
+
+# the built-in material of each ITU class that has one: what lends a Mitsuba scene's wall of that class its 2D model
+BUILTIN_BY_ITU: dict[ItuMaterial, Material] = {m.itu: m for m in BUILTIN_MATERIALS.values()}

@@ -136,30 +136,36 @@ def horizontal_slice(mesh: Mesh, height: float) -> tuple[np.ndarray, np.ndarray]
 def merge_collinear(segments: np.ndarray, material: np.ndarray, tolerance: float = 1e-7):
     """Segments (S, 2, 2) of one material that meet end to end on one line, joined into one: a wall's
     triangles cut it into pieces, and a piece's end is no edge of the wall (the caster's specular foot
-    must not fall between two pieces). Ends meet within ``tolerance`` (m): the same mesh edge cut twice."""
-    pieces = [(seg.copy(), int(m)) for seg, m in zip(segments, material)]
-    merged = True
-    while merged:
-        merged = False
-        ends: dict[tuple, int] = {}
-        for i, (seg, m) in enumerate(pieces):
-            for end in range(2):
-                key = (m, *np.round(seg[end] / tolerance).astype(np.int64))
-                j = ends.get(key)
-                if j is None:
-                    ends[key] = i
-                    continue
-                other = pieces[j][0]
-                d1, d2 = seg[1] - seg[0], other[1] - other[0]
-                if abs(d1[0] * d2[1] - d1[1] * d2[0]) > tolerance * np.linalg.norm(d1) * np.linalg.norm(d2):
-                    continue  # a corner, not one line
-                points = np.concatenate([seg, other])
-                axis = d1 / np.linalg.norm(d1)
-                t = points @ axis
-                pieces[j] = (points[[np.argmin(t), np.argmax(t)]], m)
-                pieces.pop(i)
-                merged = True
-                break
-            if merged:
-                break
-    return np.array([p for p, _ in pieces]).reshape(-1, 2, 2), np.array([m for _, m in pieces], dtype=np.int64)
+    must not fall between two pieces). Ends meet within ``tolerance`` (m): the same mesh edge cut twice.
+    One pass: each segment joins the collinear pieces already met at its ends, then waits at its own."""
+    pieces: dict[int, np.ndarray] = {}
+    waiting: dict[tuple, list[int]] = {}  # (material, rounded end) → the pieces ending there
+
+    def key(m: int, point: np.ndarray) -> tuple:
+        return (m, *np.round(point / tolerance).astype(np.int64))
+
+    for n, (seg, m) in enumerate(zip(segments, material.tolist())):
+        seg = seg.copy()
+        joined = True
+        while joined:  # at most once per end
+            joined = False
+            for end in seg:
+                for j in waiting.get(key(m, end), []):
+                    other, d1 = pieces[j], seg[1] - seg[0]
+                    d2 = other[1] - other[0]
+                    if abs(d1[0] * d2[1] - d1[1] * d2[0]) > tolerance * np.linalg.norm(d1) * np.linalg.norm(d2):
+                        continue  # a corner, not one line
+                    for e in pieces.pop(j):
+                        waiting[key(m, e)].remove(j)
+                    points = np.concatenate([seg, other])
+                    t = points @ (d1 / np.linalg.norm(d1))
+                    seg, joined = points[[np.argmin(t), np.argmax(t)]], True
+                    break
+                if joined:
+                    break
+        pieces[n] = seg
+        for e in seg:
+            waiting.setdefault(key(m, e), []).append(n)
+    order = sorted(pieces)
+    return (np.array([pieces[n] for n in order]).reshape(-1, 2, 2),
+            np.asarray(material, dtype=np.int64)[order])

@@ -13,7 +13,7 @@ from radioslam.nr.frame import FrameSchedule
 from radioslam.nr.numerology import NumerologyError
 from radioslam.scene.errors import SceneError, validation_error
 from radioslam.scene.geometry import point_segment_distance
-from radioslam.scene.materials import BUILTIN_MATERIALS, Material
+from radioslam.scene.materials import BUILTIN_BY_ITU, BUILTIN_MATERIALS, Material
 from radioslam.scene.mitsuba import horizontal_slice, read_mitsuba
 from radioslam.scene.schema import SceneSpec
 from radioslam.scene.trajectory import trajectory_poses
@@ -98,9 +98,8 @@ def _mitsuba_scene(spec: SceneSpec, materials: dict[str, Material], source: str 
     if not len(segments):
         raise SceneError(f"no wall crosses the terminal's height {spec.radio.height_m:g} m", file=str(path),
                          field="radio.height_m")
-    by_class = {m.itu: m for m in BUILTIN_MATERIALS.values()}
     for name, (cls, thickness) in itu.items():
-        model = by_class.get(cls, BUILTIN_MATERIALS["concrete"])
+        model = BUILTIN_BY_ITU.get(cls, BUILTIN_MATERIALS["concrete"])  # the caster refuses a class it lacks
         materials[name] = Material(model.reflectivity, model.scattering, model.directivity, model.transmission, cls,
                                    thickness)
     names = tuple(materials)

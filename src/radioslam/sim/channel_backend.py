@@ -12,7 +12,7 @@ import numpy as np
 from radioslam.choices import ChannelKind
 from radioslam.config import RadioConfig
 from radioslam.errors import RadioslamError
-from radioslam.scene.materials import BUILTIN_MATERIALS
+from radioslam.scene.materials import BUILTIN_BY_ITU
 from radioslam.scene.model import Scene
 from radioslam.sim.errors import SimulationError
 from radioslam.sim.paths import EchoPaths, echo_paths
@@ -51,9 +51,8 @@ def check_channel(kind: ChannelKind, scene: Scene, source: str | None = None) ->
     scene extruded, every material with an ITU class), or a one-line error naming what is missing (and
     the scene file, ``source``)."""
     if ChannelKind(kind) is ChannelKind.BUILTIN and scene.spec.mitsuba is not None:
-        modelled = {m.itu for m in BUILTIN_MATERIALS.values()}
-        unknown = sorted({scene.materials[m].itu.value for m in np.unique(scene.segment_material)} -
-                         {c.value for c in modelled})
+        used = {scene.materials[m].itu for m in np.unique(scene.segment_material)}
+        unknown = sorted(c.value for c in used - BUILTIN_BY_ITU.keys())
         if unknown:
             raise SimulationError(f"the built-in caster has no 2D model of ITU class(es) {', '.join(unknown)} in the "
                                   "mitsuba scene: run --channel sionna", file=source, field="--channel")

@@ -7,7 +7,7 @@ beams, paths, symbols and subcarriers.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, cached_property
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
@@ -73,7 +73,7 @@ class Simulator:
     window_symbols: np.ndarray  # (B, 1 + R) absolute symbol indices, the same at every pose
     window_cp: np.ndarray  # (B, 1 + R) their CP lengths
     pss_symbol: np.ndarray  # (n_sc,) the PSS on the active subcarriers
-    channel: ChannelBackend | None = None  # where a scene's echo paths come from (None: no scene)
+    channel_kind: ChannelKind = ChannelKind.BUILTIN  # where a scene's echo paths come from
 
     @classmethod
     def from_scene(cls, scene: Scene, mode: CaptureMode = CaptureMode.WAVEFORM,
@@ -97,9 +97,14 @@ class Simulator:
         window = int((all_cp + num.fft_size).sum(axis=1).max()
                      + np.ceil(longest_delay * num.sample_rate_hz) + WINDOW_GUARD_SAMPLES)
         pss = pss_grid(radio.pss, radio.n_id2, num.subcarrier_indices())
-        backend = None if scene is None else make_channel(channel, scene, radio)
         return cls(scene, radio, mode, num, schedule, beams, rows, noise_variance(radio), window, symbols, cp, pss,
-                   backend)
+                   ChannelKind(channel))
+
+    @cached_property
+    def channel(self) -> ChannelBackend | None:
+        """The scene's channel backend, built when first asked for (a memory estimate needs none; Sionna's
+        scene costs a second); None without a scene."""
+        return None if self.scene is None else make_channel(self.channel_kind, self.scene, self.radio)
 
     def memory(self) -> MemoryEstimate:
         """What simulating one pose needs, before anything is allocated (:mod:`radioslam.sim.memory`)."""
