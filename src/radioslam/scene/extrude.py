@@ -1,6 +1,7 @@
 """A 2D scene as a 3D triangle mesh (issue #16): every wall segment a vertical rectangle from the floor
 (z = 0) to ``extrude.height_m``, and the floor and ceiling, when named, rectangles over the walls'
-bounding box. What a ray tracer of meshes (Sionna RT, via :mod:`radioslam.io.mitsuba`) takes.
+bounding box. What a ray tracer of meshes takes (Sionna RT, built in memory by
+:mod:`radioslam.sim.sionna_channel`).
 
 Each rectangle is two triangles; a face's material is its wall's. Normals are left to the tracer
 (walls reflect from either side).

@@ -60,21 +60,22 @@ class SionnaOptions:
 
 
 def import_sionna():
-    """sionna.rt, mitsuba and drjit, or a one-line SimulationError saying how to install them."""
+    """sionna.rt and mitsuba (drjit loaded with them), or a one-line SimulationError saying how to install
+    them."""
     if "DRJIT_LIBLLVM_PATH" not in os.environ:
         for candidate in ("/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1", "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"):
             if os.path.exists(candidate):
                 os.environ["DRJIT_LIBLLVM_PATH"] = candidate
                 break
     try:
-        import drjit as dr
+        import drjit  # noqa: F401  (its LLVM backend fails here when no LLVM is found)
         import mitsuba as mi
         import sionna.rt as rt
     except Exception as exc:  # ImportError, or Dr.Jit's own when no LLVM is found
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise SimulationError(f"the sionna channel needs Sionna RT: {INSTALL_HINT} ({reason})",
                               field="--channel") from None
-    return rt, mi, dr
+    return rt, mi
 
 
 def beam_gains(beams: BeamSet, coefficients: np.ndarray, orientation: int) -> np.ndarray:
@@ -119,7 +120,7 @@ class SionnaChannel:
     """Echo paths of a scene's poses from Sionna RT (built once per scene)."""
 
     def __init__(self, scene: Scene, radio: RadioConfig, options: SionnaOptions = SionnaOptions()):
-        self.rt, self.mi, self.dr = import_sionna()
+        self.rt, self.mi = import_sionna()
         self.radio, self.options, self.beams = radio, options, BeamSet.from_config(radio)
         self.scene = self._sionna_scene(scene, check_scene(scene))
         self.solver = self.rt.PathSolver()
