@@ -16,7 +16,7 @@ from radioslam.scene import SceneError, load_scene, scene_from_mapping
 from radioslam.scene.extrude import extruded_mesh
 from radioslam.sim import Simulator, beam_path_gains, echo_paths
 from radioslam.sim.paths import PathKind
-from radioslam.sim.sionna_channel import beam_gains, element_factor, elevation_factor
+from radioslam.sim.sionna_channel import beam_gains, element_factor
 
 C = 299_792_458.0
 ROOM = {"version": 1, "name": "room",
@@ -92,11 +92,19 @@ def test_beamformer_of_element_coefficients_is_the_array_factor(theta_deg):
 def test_elevation_and_element_factors():
     eps = np.radians(np.array([0.0, 3.0, 10.0, -25.0, 60.0]))
     rows = 8
+    flat = BeamSet.from_config(RadioConfig())
     direct = np.abs(np.exp(1j * np.pi * np.arange(rows)[:, None] * np.sin(eps)).sum(axis=0)) / rows
-    np.testing.assert_allclose(elevation_factor(eps, rows), direct, rtol=1e-12, atol=1e-15)
-    assert elevation_factor(np.zeros(1), rows)[0] == 1.0
+    np.testing.assert_allclose(flat.vertical_factor(eps)[0], direct, rtol=1e-12, atol=1e-15)
+    assert flat.vertical_factor(np.zeros(1))[0, 0] == pytest.approx(1.0, abs=1e-15)
     # half power at about ±6.4° for 8 rows (0.886 λ/(N d) rad)
-    assert elevation_factor(np.radians([6.35]), rows)[0] ** 2 == pytest.approx(0.5, abs=0.01)
+    assert flat.vertical_factor(np.radians([6.35]))[0, 0] ** 2 == pytest.approx(0.5, abs=0.01)
+    # a raised row j steers the same sum: |Σ_r e^{jπr(sin ε − 2j/2^M)}|/N, peak 1 at sin ε = 2j/64
+    raised = BeamSet.from_config(RadioConfig(elevation_beams=5))
+    j = raised.elevation_index[:, None]
+    phase = np.pi * np.arange(rows)[:, None, None] * (np.sin(eps) - 2 * j / 64)
+    steered = np.abs(np.exp(1j * phase).sum(axis=0)) / rows
+    np.testing.assert_allclose(raised.vertical_factor(eps), steered, rtol=1e-12, atol=1e-15)
+    assert raised.vertical_factor(raised.elevation) .diagonal() == pytest.approx(1.0, abs=1e-12)
     np.testing.assert_allclose(element_factor(np.radians([0.0, 60.0, 100.0]), np.zeros(3), 2.0), [1.0, 0.5, 0.0],
                                atol=1e-15)
 

@@ -63,6 +63,25 @@ def test_beam_schedule_gives_twelve_distinct_reserved_symbols_per_beam(radio):
     assert len(np.unique(pss)) == 188
 
 
-def test_too_many_beams_is_rejected():
-    with pytest.raises(ValueError):
-        FrameSchedule.from_config(RadioConfig(codebook_bits=7, beams_per_side=30))
+def test_more_beams_than_a_burst_take_more_frames():
+    """61 azimuth beams, or 7 elevation rows of 47 (issue #16): ⌈beams/50⌉ bursts of 2 frames per orientation,
+    every beam on an SSB of its burst's first frame and 12 reserved symbols of its own."""
+    for radio, bursts in ((RadioConfig(codebook_bits=7, beams_per_side=30), 2), (RadioConfig(elevation_beams=7), 7)):
+        fs = FrameSchedule.from_config(radio)
+        assert fs.beams_per_burst == 50 and fs.bursts == bursts and fs.frames_per_orientation == 2 * bursts
+        k, b = (a.ravel() for a in np.meshgrid(np.arange(4), np.arange(fs.beams), indexing="ij"))
+        sens, pss = fs.sensing_symbols(k, b), fs.pss_symbol(k, b)
+        assert len(np.unique(sens)) == sens.size == 4 * fs.beams * 12  # no symbol serves two beams
+        assert np.all(np.isin(sens % 2240, fs.reserved_symbols()))
+        assert np.array_equal(pss % 2240, case_d_ssb_starts()[fs.ssb_index(b)]) and len(np.unique(pss)) == len(b)
+        first_frame = (k * bursts + b // 50) * 2
+        assert np.array_equal(pss // 2240, first_frame)
+        assert np.all(sens[:, :6] // 2240 == first_frame[:, None])
+        assert np.all(sens[:, 6:] // 2240 == first_frame[:, None] + 1)
+        assert sens.max() // 2240 == 4 * 2 * bursts - 1  # the pose's last frame
+
+
+def test_flat_scan_schedule_is_one_burst(radio):
+    fs = FrameSchedule.from_config(radio)
+    assert fs.bursts == 1 and fs.frames_per_orientation == 2
+    assert np.array_equal(fs.ssb_index(np.arange(47)), np.arange(47))

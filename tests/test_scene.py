@@ -49,9 +49,8 @@ def _variant(**changes):
      "materials.x", "exceeds 1"),
     (_variant(walls=[{"points": [[0, 0], [0, 0]], "material": "metal"}]), "walls[0].points", "zero-length"),
     ([1, 2], "(top level)", "must be a mapping"),
-    (_variant(radio={"array_elements": 16, "codebook_bits": 7, "beams_per_side": 46}), "radio",
-     "exceed the 64 SSBs"),
-    (_variant(radio={"codebook_bits": 7, "beams_per_side": 31}), "radio", "exceed 304 reserved symbols"),
+    (_variant(radio={"elevation_beams": 4}), "radio", "must be odd"),
+    (_variant(radio={"elevation_beams": 13}), "radio", "outside the visible region"),
     (_variant(radio={"subcarrier_spacing_hz": 60e3}), "radio", "120 kHz"),
     # bounds before work (issue #15): a building, not a continent; a radio this machine can simulate
     (_variant(trajectory={"poses": [[2e4, 0.0, 0.0]]}), "trajectory.poses[0][0]", "less than or equal to 10000"),

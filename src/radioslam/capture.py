@@ -53,8 +53,13 @@ class Capture:
     grid: np.ndarray | None = None  # (B, R, n_sc) complex64
     fft_offset_samples: int = 0
     source: str = field(default="memory")
+    beam_elevation_rad: np.ndarray | None = None  # (B,) elevation each beam points at; None: all 0 (flat)
+    elevation_index: np.ndarray | None = None  # (B,) elevation codebook index j; None: all 0 (flat)
 
     def __post_init__(self) -> None:
+        for name in ("beam_elevation_rad", "elevation_index"):  # a flat capture (or recording) has none
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.zeros(len(self.beam_index), float if "rad" in name else np.int64))
         self.validate()
 
     @property
@@ -98,13 +103,16 @@ class Capture:
                        beam_angle_rad=self.beam_angle_rad[rows], ssb_index=self.ssb_index[rows],
                        symbol_indices=self.symbol_indices[rows], tx_bits=self.tx_bits[rows],
                        samples=pick(self.samples), grid=pick(self.grid),
-                       fft_offset_samples=self.fft_offset_samples, source=self.source)
+                       fft_offset_samples=self.fft_offset_samples, source=self.source,
+                       beam_elevation_rad=self.beam_elevation_rad[rows], elevation_index=self.elevation_index[rows])
 
     def validate(self) -> None:
         b, r, n_sc = self.n_beams, self.radio.symbols_per_beam, self.radio.n_subcarriers
         checks = [
             ("orientation", self.orientation.shape == (b,)),
             ("beam_angle_rad", self.beam_angle_rad.shape == (b,)),
+            ("beam_elevation_rad", self.beam_elevation_rad.shape == (b,)),
+            ("elevation_index", self.elevation_index.shape == (b,)),
             ("ssb_index", self.ssb_index.shape == (b,)),
             ("symbol_indices", self.symbol_indices.shape == (b, 1 + r)),
             ("tx_bits", self.tx_bits.shape == (b, r, 4 * n_sc)),

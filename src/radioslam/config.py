@@ -108,6 +108,17 @@ class RadioConfig(BaseModel):
     codebook_bits: int = Field(6, ge=2, le=10)
     beams_per_side: int = Field(23, ge=0)  # i = -23..23: 47 beams, ±45.95°
     orientations: int = Field(4, ge=1, le=8)
+    # ★ elevation beams of the 8×8 array (a DFT codebook over its columns, issue #16): 1, today's flat scan;
+    # odd, so that one beam is horizontal (the SLAM's slice)
+    elevation_beams: int = Field(1, ge=1, le=15)
+    # spacing of the elevation codebook indices j (ϑ_v = j/2^M); None: 2^M/(2·N) (half the orthogonal
+    # spacing, adjacent beams cross at −3.9 dB so that heights can be interpolated between them)
+    elevation_step: int | None = Field(None, ge=1)
+    # the built-in caster's ray spacing over azimuth and elevation when it traces in 3D (elevation beams)
+    ray_spacing_3d_deg: float = Field(2.0, ge=0.1, le=10.0)
+    # Sionna RT's diffuse rays per source (each of the 4 orientations' TX): its paths, and so the memory of
+    # the beams' gains (beams × paths), grow with it
+    sionna_samples: int = Field(200_000, ge=1_000, le=10_000_000)
     symbols_per_frame: int = Field(6, ge=1, le=14)  # sensing symbols per beam per frame
     frames: int = Field(2, ge=1, le=64)  # R = symbols_per_frame * frames = 12
     pss: PssKind = PssKind.M_SEQUENCE
@@ -142,6 +153,12 @@ class RadioConfig(BaseModel):
             raise ValueError("n_subcarriers must be a whole number of resource blocks (12)")
         if self.beams_per_side >= 2 ** (self.codebook_bits - 1):
             raise ValueError("beams_per_side must stay below 2^(codebook_bits-1) (|sin θ| < 1)")
+        if self.elevation_beams % 2 == 0:
+            raise ValueError("elevation_beams must be odd: a symmetric codebook with one horizontal beam")
+        u_y, u_z = 2.0 * self.beams_per_side / 2**self.codebook_bits, 2.0 * self.elevation_span / 2**self.codebook_bits
+        if u_y**2 + u_z**2 >= 1.0:
+            raise ValueError(f"elevation beams up to index {self.elevation_span} with azimuth beams up to "
+                             f"{self.beams_per_side} point outside the visible region (u_y² + u_z² ≥ 1)")
         return self
 
     @property
@@ -158,5 +175,21 @@ class RadioConfig(BaseModel):
         return self.symbols_per_frame * self.frames
 
     @property
-    def beams_per_orientation(self) -> int:
+    def azimuth_beams(self) -> int:
+        """Beams of one elevation row of the codebook: 2·beams_per_side + 1 (47)."""
         return 2 * self.beams_per_side + 1
+
+    @property
+    def elevation_spacing(self) -> int:
+        """The elevation codebook's index step (``elevation_step``, or 2^M/(2N))."""
+        return self.elevation_step or max(1, 2**self.codebook_bits // (2 * self.array_elements))
+
+    @property
+    def elevation_span(self) -> int:
+        """The largest elevation codebook index |j|."""
+        return (self.elevation_beams - 1) // 2 * self.elevation_spacing
+
+    @property
+    def beams_per_orientation(self) -> int:
+        """Beams swept per orientation: azimuth × elevation (47 for the flat scan)."""
+        return self.azimuth_beams * self.elevation_beams

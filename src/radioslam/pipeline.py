@@ -16,6 +16,7 @@ import numpy as np
 
 from radioslam.choices import ChannelKind
 from radioslam.errors import RadioslamError
+from radioslam.eval.map3d import height_error_summary, match_surfaces
 from radioslam.eval.map_metrics import map_coverage, map_error
 from radioslam.eval.ranging import beam_half_width_rad, robust_rmse, specular_range_errors
 from radioslam.eval.trajectory_metrics import align, ate_rmse, rpe_rmse
@@ -28,6 +29,7 @@ from radioslam.io.ros_map import FREE, OCCUPIED, UNKNOWN, read_ros_map, write_ro
 from radioslam.io.rundir import RunDir
 from radioslam.io.slam_summary import read_slam_summary
 from radioslam.scene import Scene, load_scene, scene_to_yaml
+from radioslam.scene.extrude import scene_mesh
 from radioslam.sensing import Receiver, SensingConfig, estimate_hardware_delay
 from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import Simulator
@@ -179,14 +181,19 @@ def write_slam_outputs(run: RunDir, scans: list[Scan], result: SlamResult, cfg: 
     write_tum(run.trajectory, stamps, result.poses)
     write_tum(run.trajectory_odometry, stamps, result.odometry)
     kept = [k for k, status in enumerate(result.status) if status is not ScanStatus.SKIPPED]
+    clouds, scans = scans, [scan.horizontal() for scan in scans]  # 3D clouds; the SE(2) SLAM's slice
     thinned = [thin_scan(scans[k], cfg.scan.max_points, cfg.scan.max_range_m, cfg.grid.resolution_m)[0] for k in kept]
     write_ros_map(run.map_yaml, occupancy_grid(result.poses[kept], [s.xy for s in thinned], cfg.map))
-    fused = Scan(*(np.concatenate([getattr(scans[k], f) for k in kept]) if kept else np.zeros(0)
-                   for f in ("range_m", "angle_rad", "power_db", "beam", "orientation")))
-    world = np.concatenate([transform_points(result.poses[k], scans[k].xy) for k in kept]) if kept else np.zeros((0, 2))
-    write_scan(run.map_cloud, fused, comment="fused map, world frame", xy=world)
+    fused = Scan.concatenate([clouds[k] for k in kept])
+    world = (np.concatenate([transform_points(result.poses[k], clouds[k].xy) for k in kept]) if kept
+             else np.zeros((0, 2)))
+    terminal_height, height_from = run.terminal_height_m()
+    height = fused.z + terminal_height  # the terminal is level: a point's height above the floor
+    write_scan(run.map_cloud, fused, comment="fused map, world frame, z above the floor",
+               xyz=np.column_stack([world, height]))
     write_json(run.slam_summary, {
         "scan_status": [status.value for status in result.status],
+        "map_height": {"terminal_height_m": terminal_height, "from": height_from},
         "status_counts": result.status_counts(),
         "tracking_lost": result.tracking_lost,
         "lost_scans": result.lost_scans,
@@ -254,7 +261,21 @@ def _ranging_errors(run: RunDir, scene, truth: np.ndarray) -> np.ndarray:
     if not all(f.exists() for f in files):
         return np.zeros(0)
     return np.concatenate([specular_range_errors(pose, scan.range_m, scan.angle_rad, scene.segments, tolerance)
-                           for pose, scan in zip(truth, (read_scan(f) for f in files))] or [np.zeros(0)])
+                           for pose, scan in zip(truth, (read_scan(f).horizontal() for f in files))]
+                          or [np.zeros(0)])
+
+
+def map_3d_metrics(run: RunDir, scene, transform: np.ndarray) -> dict:
+    """With elevation beams and a 3D scene: map.ply's points (aligned like the trajectory) against the true
+    surfaces (:mod:`radioslam.eval.map3d`): the median 3D distance and the height errors on horizontal
+    faces (floor, ceiling, furniture tops); nothing for a flat map or a 2D scene."""
+    mesh = scene_mesh(scene)
+    cloud = read_map_points(run.map_cloud, dims=3)
+    if mesh is None or not len(cloud) or not np.any(np.abs(cloud[:, 2] - cloud[0, 2]) > 0):
+        return {}
+    points = np.column_stack([transform_points(transform, cloud[:, :2]), cloud[:, 2]])
+    summary = height_error_summary(match_surfaces(points, mesh))
+    return {"map_error_3d_m": summary.pop("distance_median_m", None), "height_error": summary}
 
 
 def evaluate_stage(out: Path) -> dict:
@@ -282,7 +303,7 @@ def _evaluate(run: RunDir) -> dict:
     scene = load_scene(str(run.scene))
     summary = read_slam_summary(run.slam_summary)
     _, transform = align(estimate, truth)
-    cloud = read_map_points(run.map_cloud)
+    cloud = read_map_points(run.map_cloud, horizontal=True)  # the SLAM's slice: the 2D metrics' points
     points = transform_points(transform, cloud)
     counts = summary.get("points_per_scan", [])
     ranging_rmse, ranging_points = robust_rmse(_ranging_errors(run, scene, truth))
@@ -302,6 +323,7 @@ def _evaluate(run: RunDir) -> dict:
         "status_counts": summary.get("status_counts", {}),
         "lost_scans": summary.get("lost_scans", []),
         "slam_ms_per_scan": summary.get("slam_ms_per_scan_median"),
+        **map_3d_metrics(run, scene, transform),
         "timings_s": {**summary.get("timings_s", {}), "evaluate": time.perf_counter() - tick},
     }
     write_json(run.metrics, metrics)

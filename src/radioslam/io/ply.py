@@ -1,8 +1,11 @@
 """Point clouds as PLY (binary little endian) through ``plyfile``.
 
-A scan is one ``vertex`` element with x, y, z (terminal frame, z = 0), power_db
-(relative to the scan's strongest return), beam (codebook index i), orientation
-(k) and range_m (DESIGN.md §5). A map adds nothing else; its x, y are world frame.
+A scan is one ``vertex`` element with x, y, z (terminal frame; z the height above
+the arrays' centre, 0 for a flat scan), power_db (relative to the strongest return
+of the point's elevation row), beam (codebook index i), orientation (k) and range_m
+(DESIGN.md §5), and elevation_beam (the elevation codebook index j, issue #16;
+optional on reading: a flat scan's files before it have none). A map's x, y, z are
+world frame, z the height above the floor.
 """
 
 from __future__ import annotations
@@ -18,16 +21,18 @@ from radioslam.sensing.pointcloud import Scan
 
 VERTEX_DTYPE = [("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("power_db", "<f4"), ("beam", "<i2"),
                 ("orientation", "<u1"), ("range_m", "<f8")]
+OPTIONAL_DTYPE = [("elevation_beam", "<i2")]
 
 
-def write_scan(path: str | Path, scan: Scan, comment: str = "", xy: np.ndarray | None = None) -> None:
+def write_scan(path: str | Path, scan: Scan, comment: str = "", xyz: np.ndarray | None = None) -> None:
     """Write a scan (atomically); an empty scan is a valid file with zero vertices.
 
-    ``xy`` replaces the terminal-frame coordinates (a fused map in the world frame).
+    ``xyz`` (P, 3) replaces the terminal-frame coordinates (a fused map in the world frame).
     """
-    vertices = np.empty(len(scan), dtype=VERTEX_DTYPE)
-    xy = scan.xy if xy is None else xy
-    vertices["x"], vertices["y"], vertices["z"] = xy[:, 0], xy[:, 1], 0.0
+    vertices = np.empty(len(scan), dtype=VERTEX_DTYPE + OPTIONAL_DTYPE)
+    xyz = scan.xyz if xyz is None else xyz
+    vertices["x"], vertices["y"], vertices["z"] = xyz[:, 0], xyz[:, 1], xyz[:, 2]
+    vertices["elevation_beam"] = scan.elevation_beam
     vertices["power_db"], vertices["beam"] = scan.power_db, scan.beam
     vertices["orientation"], vertices["range_m"] = scan.orientation, scan.range_m
     data = PlyData([PlyElement.describe(vertices, "vertex")], text=False, byte_order="<",
@@ -60,14 +65,22 @@ def read_vertices(path: str | Path) -> np.ndarray:
 
 
 def read_scan(path: str | Path) -> Scan:
-    """Read a scan written by :func:`write_scan` (angle from x, y)."""
+    """Read a scan written by :func:`write_scan` (azimuth from x, y; elevation from z over the range)."""
     vertex = read_vertices(path)
-    x, y = np.asarray(vertex["x"], float), np.asarray(vertex["y"], float)
-    return Scan(np.asarray(vertex["range_m"], float), np.arctan2(y, x), np.asarray(vertex["power_db"], float),
-                np.asarray(vertex["beam"], np.int64), np.asarray(vertex["orientation"], np.int64))
+    x, y, z = (np.asarray(vertex[k], float) for k in ("x", "y", "z"))
+    r = np.asarray(vertex["range_m"], float)
+    elevation = np.arctan2(z, np.hypot(x, y))
+    beam = (np.asarray(vertex["elevation_beam"], np.int64) if "elevation_beam" in vertex.dtype.names
+            else np.zeros(len(r), np.int64))
+    return Scan(r, np.arctan2(y, x), np.asarray(vertex["power_db"], float), np.asarray(vertex["beam"], np.int64),
+                np.asarray(vertex["orientation"], np.int64), elevation, beam)
 
 
-def read_map_points(path: str | Path) -> np.ndarray:
-    """World-frame x, y (P, 2) of a fused map cloud."""
+def read_map_points(path: str | Path, dims: int = 2, horizontal: bool = False) -> np.ndarray:
+    """World-frame x, y (P, 2), or x, y, z (P, 3) with ``dims=3``, of a fused map cloud; ``horizontal``:
+    only the horizontal elevation row's points (the SLAM's slice, what the 2D map metrics compare)."""
     vertex = read_vertices(path)
-    return np.column_stack([np.asarray(vertex["x"], float), np.asarray(vertex["y"], float)])
+    keep = np.ones(len(vertex), bool)
+    if horizontal and "elevation_beam" in vertex.dtype.names:
+        keep = np.asarray(vertex["elevation_beam"]) == 0
+    return np.column_stack([np.asarray(vertex[k], float)[keep] for k in ("x", "y", "z")[:dims]])

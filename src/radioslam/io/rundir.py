@@ -6,6 +6,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import yaml
+
+from radioslam.config import RadioConfig
 
 
 @dataclass(frozen=True)
@@ -72,6 +75,17 @@ class RunDir:
     def relative(self, path: Path) -> str:
         """``path`` (in the run directory) relative to it, as run.json names files."""
         return Path(path).relative_to(self.root).as_posix()
+
+    def terminal_height_m(self) -> tuple[float, str]:
+        """The terminal's height above the floor (what lifts a scan's z to the map's) and where it came
+        from: the run's scene.yaml (``radio.height_m``), else the radio's default."""
+        try:
+            height = yaml.safe_load(self.scene.read_text(encoding="utf-8"))["radio"]["height_m"]
+            if isinstance(height, (int, float)) and np.isfinite(height) and height > 0:
+                return float(height), "scene.yaml radio.height_m"
+        except (OSError, yaml.YAMLError, KeyError, TypeError):
+            pass
+        return RadioConfig().height_m, "the radio's default (no scene.yaml with radio.height_m)"
 
     def scan_file(self, pose_index: int) -> Path:
         return self.scans / f"{pose_index:04d}.ply"

@@ -8,7 +8,9 @@ Data: the 188 beam windows back to back, ``cf32_le``. Metadata:
   annotations  one per beam window: ``radioslam:orientation``, ``beam_index``,
                ``beam_angle_rad``, ``ssb_index``, ``symbol_indices`` (PSS symbol then
                the R sensing symbols) and ``tx_bits`` (the transmitted payload, packed
-               bits in base64), so the recording is self-contained for the receiver.
+               bits in base64), so the recording is self-contained for the receiver;
+               with elevation beams also ``beam_elevation_rad`` and ``elevation_index``
+               (absent: a flat scan, 0).
 The data file is written first and the metadata last, each by write-then-rename:
 a ``.sigmf-meta`` that exists describes a complete recording.
 """
@@ -35,6 +37,7 @@ NS = "radioslam"
 SIGMF_SPECIFICATION = getattr(sigmf, "__specification__", sigmf.__version__)
 EXTENSION = {"name": NS, "version": "1.0.0", "optional": False}
 ANNOTATION_KEYS = ("orientation", "beam_index", "beam_angle_rad", "ssb_index", "symbol_indices", "tx_bits")
+ELEVATION_KEYS = ("beam_elevation_rad", "elevation_index")  # optional: a flat scan's recording has none
 
 
 def _pack_bits(bits: np.ndarray) -> str:
@@ -78,6 +81,7 @@ def write_capture(capture: Capture, base: str | Path) -> Path:
         f"{NS}:window_samples": window, f"{NS}:radio": radio.model_dump(mode="json"),
     })
     record.add_capture(0, metadata={"core:frequency": radio.carrier_hz})
+    elevated = bool(np.any(capture.elevation_index != 0))
     for b in range(capture.n_beams):
         record.add_annotation(b * window, window, metadata={
             "core:label": f"o{capture.orientation[b]} i{capture.beam_index[b]:+d}",
@@ -85,6 +89,8 @@ def write_capture(capture: Capture, base: str | Path) -> Path:
             f"{NS}:beam_angle_rad": float(capture.beam_angle_rad[b]), f"{NS}:ssb_index": int(capture.ssb_index[b]),
             f"{NS}:symbol_indices": [int(s) for s in capture.symbol_indices[b]],
             f"{NS}:tx_bits": _pack_bits(capture.tx_bits[b]),
+            **({f"{NS}:beam_elevation_rad": float(capture.beam_elevation_rad[b]),
+                f"{NS}:elevation_index": int(capture.elevation_index[b])} if elevated else {}),
         })
     record.validate()
     with atomic_path(meta) as tmp, open(tmp, "w", encoding="utf-8") as handle:
@@ -172,6 +178,8 @@ def read_capture(base_or_meta: str | Path) -> Capture:
                              field=f"annotations[{b}].{NS}:tx_bits") from None
         for key in ANNOTATION_KEYS[:-1]:
             fields[key].append(ann[f"{NS}:{key}"])
+        for key in ELEVATION_KEYS:
+            fields.setdefault(key, []).append(ann.get(f"{NS}:{key}", 0))
     try:
         pose_index = int(_global(meta, f"{NS}:pose_index", meta_file))
         return Capture(radio=radio, mode=CaptureMode.WAVEFORM, pose_index=pose_index,
@@ -180,7 +188,9 @@ def read_capture(base_or_meta: str | Path) -> Capture:
                        beam_angle_rad=np.array(fields["beam_angle_rad"], dtype=np.float64),
                        ssb_index=np.array(fields["ssb_index"], dtype=np.int64),
                        symbol_indices=np.array(fields["symbol_indices"], dtype=np.int64),
-                       tx_bits=np.stack(fields["tx_bits"]), samples=samples, source=str(data_file))
+                       tx_bits=np.stack(fields["tx_bits"]), samples=samples, source=str(data_file),
+                       beam_elevation_rad=np.array(fields["beam_elevation_rad"], dtype=np.float64),
+                       elevation_index=np.array(fields["elevation_index"], dtype=np.int64))
     except CaptureError:
         raise
     except (ValueError, TypeError) as exc:

@@ -37,6 +37,8 @@ class BeamAnnotation(_Open):
     ssb_index: Count = Field(alias=f"{NS}:ssb_index")
     symbol_indices: list[Count] = Field(alias=f"{NS}:symbol_indices")
     tx_bits: str = Field(alias=f"{NS}:tx_bits")
+    beam_elevation_rad: Number = Field(0.0, alias=f"{NS}:beam_elevation_rad", ge=-2, le=2)
+    elevation_index: StrictInt = Field(0, alias=f"{NS}:elevation_index")
 
 
 class CaptureMeta(_Open):

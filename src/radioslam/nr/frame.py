@@ -7,10 +7,15 @@ symbols = 2240 symbols. Its first 5 ms (560 symbols) hold the SSB burst of case 
 occupies 4 symbols. The 560 − 64·4 = 304 symbols left over are the paper's
 "304 reserved symbols": sensing symbols go there.
 
-Beam b of an orientation uses SSB b (its PSS is that SSB's first symbol) and the
-reserved symbols 6b … 6b+5 of each of ``frames`` consecutive frames, so every
-beam gets R = 6·2 = 12 sensing symbols. Orientation o uses frames
-o·frames … (o+1)·frames − 1. Symbol indices are absolute: frame·2240 + symbol.
+A burst of one frame serves at most Q = min(64, ⌊304/S⌋) beams (S = 6 sensing symbols
+per beam per frame: Q = 50). Beam slot s of an orientation (0 … beams − 1) belongs to
+burst g = ⌊s/Q⌋ at position q = s mod Q: it uses SSB q (its PSS is that SSB's first
+symbol) and the reserved symbols q·S … q·S + S − 1 of each of ``frames`` consecutive
+frames, so every beam gets R = S·frames = 12 sensing symbols. With G = ⌈beams/Q⌉
+bursts per orientation, orientation o's burst g uses frames (o·G + g)·frames …
+(o·G + g + 1)·frames − 1, and a pose takes orientations·G·frames frames. The flat
+scan's 47 beams fit one burst (G = 1, 8 frames a pose); 7 elevation rows of 47 need
+G = 7. Symbol indices are absolute: frame·2240 + symbol.
 """
 
 from __future__ import annotations
@@ -50,12 +55,31 @@ class FrameSchedule:
     def __post_init__(self) -> None:
         if self.numerology.mu != 3:
             raise NumerologyError("the SSB burst pattern (case D) is defined for 120 kHz spacing only")
-        if self.beams > len(case_d_ssb_starts()):
-            raise NumerologyError(f"{self.beams} beams exceed the 64 SSBs of a burst")
-        if self.beams * self.symbols_per_frame > len(self.reserved_symbols()):
-            raise NumerologyError(
-                f"{self.beams} beams × {self.symbols_per_frame} symbols exceed "
-                f"{len(self.reserved_symbols())} reserved symbols")
+        if self.beams_per_burst < 1:
+            raise NumerologyError(f"{self.symbols_per_frame} symbols per beam exceed "
+                                  f"{len(self.reserved_symbols())} reserved symbols")
+
+    @property
+    def beams_per_burst(self) -> int:
+        """Q: beams one frame's burst serves, bounded by its SSBs and its reserved symbols."""
+        return min(len(case_d_ssb_starts()), len(self.reserved_symbols()) // self.symbols_per_frame)
+
+    @property
+    def bursts(self) -> int:
+        """G: bursts (of ``frames`` frames each) per orientation."""
+        return -(-self.beams // self.beams_per_burst)
+
+    @property
+    def frames_per_orientation(self) -> int:
+        """Frames one orientation's sweep takes: G × frames (a pose: orientations times that)."""
+        return self.bursts * self.frames
+
+    def ssb_index(self, beam: np.ndarray | int) -> np.ndarray:
+        """SSB (position q in its burst) of each beam slot."""
+        return np.asarray(beam) % self.beams_per_burst
+
+    def _first_frame(self, orientation, beam) -> np.ndarray:
+        return (np.asarray(orientation) * self.bursts + np.asarray(beam) // self.beams_per_burst) * self.frames
 
     @property
     def symbols_per_frame_total(self) -> int:
@@ -84,15 +108,15 @@ class FrameSchedule:
 
     def pss_symbol(self, orientation: np.ndarray | int, beam: np.ndarray | int) -> np.ndarray:
         """Absolute index of the PSS symbol (first SSB symbol) of each beam."""
-        frame = np.asarray(orientation) * self.frames
-        return frame * self.symbols_per_frame_total + case_d_ssb_starts()[np.asarray(beam)]
+        frame = self._first_frame(orientation, beam)
+        return frame * self.symbols_per_frame_total + case_d_ssb_starts()[self.ssb_index(beam)]
 
     def sensing_symbols(self, orientation: np.ndarray | int, beam: np.ndarray | int) -> np.ndarray:
         """Absolute indices (..., R) of the sensing symbols of each beam."""
         orientation, beam = np.broadcast_arrays(np.asarray(orientation), np.asarray(beam))
         reserved = self.reserved_symbols()
-        within = reserved[beam[..., None] * self.symbols_per_frame + np.arange(self.symbols_per_frame)]
-        frame = orientation[..., None, None] * self.frames + np.arange(self.frames)[:, None]  # (..., F, 1)
+        within = reserved[self.ssb_index(beam)[..., None] * self.symbols_per_frame + np.arange(self.symbols_per_frame)]
+        frame = self._first_frame(orientation, beam)[..., None, None] + np.arange(self.frames)[:, None]  # (..., F, 1)
         symbols = frame * self.symbols_per_frame_total + within[..., None, :]  # (..., F, S)
         return symbols.reshape(*beam.shape, self.repetitions)
 

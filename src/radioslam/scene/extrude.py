@@ -13,6 +13,7 @@ import numpy as np
 
 from radioslam.scene.errors import SceneError
 from radioslam.scene.mesh import Mesh
+from radioslam.scene.mitsuba import read_mitsuba
 from radioslam.scene.model import Scene
 
 
@@ -42,3 +43,10 @@ def extruded_mesh(scene: Scene) -> Mesh:
     vertices, faces = _rectangles(np.concatenate(corners))
     face_material = np.repeat(np.concatenate(materials), 2)
     return Mesh(vertices, faces, face_material, scene.material_names)
+
+
+def scene_mesh(scene: Scene) -> Mesh | None:
+    """The scene's true 3D surfaces: its Mitsuba mesh, its extrusion, or None for a 2D scene."""
+    if scene.spec.mitsuba is not None:
+        return read_mitsuba(scene.spec.mitsuba)[0]
+    return None if scene.spec.extrude is None else extruded_mesh(scene)

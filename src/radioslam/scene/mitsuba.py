@@ -16,7 +16,7 @@ import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
 import numpy as np
-from plyfile import PlyData, PlyParseError
+from plyfile import PlyData, PlyElement, PlyParseError
 
 from radioslam.scene.errors import SceneError
 from radioslam.scene.materials import ItuMaterial
@@ -169,3 +169,35 @@ def merge_collinear(segments: np.ndarray, material: np.ndarray, tolerance: float
     order = sorted(pieces)
     return (np.array([pieces[n] for n in order]).reshape(-1, 2, 2),
             np.asarray(material, dtype=np.int64)[order])
+
+
+def write_mitsuba(path: str | Path, mesh: Mesh, itu: dict[str, ItuMaterial]) -> Path:
+    """Write ``mesh`` as a Mitsuba 3 XML scene at ``path`` that Sionna RT and :func:`read_mitsuba` load: one
+    binary PLY per material under ``meshes/`` beside it, each a ``<shape type="ply">`` with a ``<ref>`` to a
+    bsdf named ``mat-itu_CLASS`` (as Sionna's Blender add-on exports) of that material's ITU class ``itu``.
+    Each file is written to a temporary name, then renamed; the XML last."""
+    path = Path(path)
+    (path.parent / "meshes").mkdir(parents=True, exist_ok=True)
+    shapes, bsdfs = [], {}
+    for m in np.unique(mesh.face_material):
+        part, name = mesh.of_material(int(m)), mesh.material_names[m]
+        vertex = np.empty(len(part.vertices), dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4")])
+        vertex["x"], vertex["y"], vertex["z"] = part.vertices.T
+        face = np.empty(len(part.faces), dtype=[("vertex_indices", "<i4", (3,))])
+        face["vertex_indices"] = part.faces
+        target = path.parent / "meshes" / f"{name}.ply"
+        _replace(target, lambda tmp, v=vertex, f=face: PlyData(
+            [PlyElement.describe(v, "vertex"), PlyElement.describe(f, "face")]).write(str(tmp)))
+        cls = itu[name].value
+        bsdfs[cls] = f'  <bsdf type="twosided" id="mat-itu_{cls}"><bsdf type="principled"/></bsdf>\n'
+        shapes.append(f'  <shape type="ply" id="{name}"><string name="filename" value="meshes/{name}.ply"/>'
+                      f'<ref id="mat-itu_{cls}" name="bsdf"/></shape>\n')
+    xml = f'<scene version="2.1.0">\n{"".join(bsdfs.values())}{"".join(shapes)}</scene>\n'
+    _replace(path, lambda tmp: tmp.write_text(xml, encoding="utf-8"))
+    return path
+
+
+def _replace(target: Path, write) -> None:
+    tmp = target.with_name(f".{target.name}.tmp")
+    write(tmp)
+    tmp.replace(target)

@@ -85,7 +85,8 @@ def measure_leakage(capture: Capture, cfg: SensingConfig | None = None) -> Leaka
                            field="leakage capture")
     delay = (offset + det.lag[:, 0]) / receiver.fs
     return LeakageModel(capture.orientation.copy(), capture.beam_index.copy(),
-                        np.where(seen, delay, np.median(delay[seen])), np.where(seen, det.amplitude[:, 0], 0.0))
+                        np.where(seen, delay, np.median(delay[seen])), np.where(seen, det.amplitude[:, 0], 0.0),
+                        capture.elevation_index.copy())
 
 
 def estimate_hardware_delay(captures: list[Capture], ranges_m: np.ndarray, cfg: SensingConfig | None = None,
@@ -142,4 +143,5 @@ def _after(leakage: LeakageModel | None, hardware_delay_s: float) -> LeakageMode
     """The measured leakage with its delays made relative to T_H."""
     if leakage is None:
         return None
-    return LeakageModel(leakage.orientation, leakage.beam_index, leakage.delay_s - hardware_delay_s, leakage.amplitude)
+    return LeakageModel(leakage.orientation, leakage.beam_index, leakage.delay_s - hardware_delay_s, leakage.amplitude,
+                        leakage.elevation_index)

@@ -16,7 +16,8 @@ from radioslam.capture import Capture, CaptureMode
 from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
 from radioslam.nr.numerology import Numerology
 from radioslam.sensing.config import FAR_GATE_M, NEAR_GATE_M, Detector, PointFilter, SensingConfig
-from radioslam.sensing.detect import Detections, LagGate, detect_multi, detect_single, pdp_peaks
+from radioslam.sensing.detect import Detections, LagGate, detect_multi, detect_single, leakage_cancelled, pdp_peaks
+from radioslam.sensing.elevation import detection_elevations
 from radioslam.sensing.errors import SensingError
 from radioslam.sensing.estimate import ChannelEstimate, estimate_channel
 from radioslam.sensing.leakage import LeakageModel
@@ -104,7 +105,8 @@ class Receiver:
         """(B,) the leakage's delay after T_H on each beam: calibrated, or b/c."""
         if self.leakage is None:
             return np.full(len(capture.beam_index), self.radio.array_baseline_m / SPEED_OF_LIGHT)
-        return self.leakage.delay_s[self.leakage.rows_of(capture.orientation, capture.beam_index, capture.source)]
+        return self.leakage.delay_s[self.leakage.rows_of(capture.orientation, capture.beam_index, capture.source,
+                                                         capture.elevation_index)]
 
     def gate(self, capture: Capture, offset: np.ndarray, low_s: np.ndarray, high_s: np.ndarray) -> LagGate:
         leak = (np.full(len(offset), np.nan) if self.hardware_delay_s is None else
@@ -142,6 +144,23 @@ class Receiver:
         same_range = self.cfg.detector is Detector.SINGLE and self.cfg.point_filter is PointFilter.SAME_RANGE
         return self.cfg.point_floor_db if same_range else None
 
+    def directions(self, capture: Capture, spec: RangeSpectrum, gate: LagGate, window_offset: np.ndarray,
+                   lag: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Terminal-frame azimuth and elevation of each detection: its beam's for a flat scan (B,); with
+        elevation rows (B, M), u_z between the rows' leakage-cancelled profiles
+        (:mod:`radioslam.sensing.elevation`), u_y the beam's, the azimuth on the cone they give."""
+        if not np.any(capture.elevation_index != 0):
+            return capture.beam_angle_rad, capture.beam_elevation_rad
+        radio = self.radio
+        u_z = detection_elevations(leakage_cancelled(spec, gate), window_offset, lag, valid, capture.orientation,
+                                   capture.beam_index,
+                                   capture.elevation_index, radio.array_elements, radio.codebook_bits)
+        u_y = np.broadcast_to((2.0 * capture.beam_index / 2**radio.codebook_bits)[:, None], u_z.shape)
+        u_z = np.clip(np.nan_to_num(u_z), -np.sqrt(1 - u_y**2) + 1e-9, np.sqrt(1 - u_y**2) - 1e-9)
+        normal = capture.orientation * (2 * np.pi / radio.orientations)
+        azimuth = normal[:, None] + np.arctan2(u_y, np.sqrt(1.0 - u_y**2 - u_z**2))
+        return np.angle(np.exp(1j * azimuth)), np.arcsin(u_z)
+
     def to_range(self, delay_s: np.ndarray) -> np.ndarray:
         """Range from T1 + T2 after the calibrated hardware delay (bistatic, eq. (11)'s T_O inverted)."""
         half_path = 0.5 * SPEED_OF_LIGHT * (delay_s - self.hardware_delay_s)
@@ -154,14 +173,18 @@ class Receiver:
         # 3. range profile: PDP of Ĥ (single target) or MF with coherent integration (multi)
         spec = self.spectrum(est)
         # 4. detection in the range gate, leakage cancelled, peaks refined (T2: bracketed, or the paper's bisection)
-        det = self.detect(spec, self.range_gate(capture, est.window_offset))
+        gate = self.range_gate(capture, est.window_offset)
+        det = self.detect(spec, gate)
         valid = det.valid & found[:, None]
         delay = (est.window_offset[:, None] + det.lag) / self.fs
         rng = np.where(valid, self.to_range(np.nan_to_num(delay)), np.nan)
         power = np.abs(det.amplitude) ** 2
-        # 5. point cloud: normalize by the scan's peak, keep what clears the threshold
-        scan = build_scan(rng, power, valid, capture.beam_angle_rad, capture.beam_index, capture.orientation,
-                          self.point_threshold_db(), self.point_floor_db(), self.cell_m)
+        # 5. with elevation beams, each detection's elevation from the rows' responses at its delay
+        azimuth, elevation = self.directions(capture, spec, gate, est.window_offset, det.lag, valid)
+        # 6. point cloud: normalize by the scan's (row's) peak, keep what clears the threshold
+        scan = build_scan(rng, power, valid, azimuth, capture.beam_index, capture.orientation,
+                          self.point_threshold_db(), self.point_floor_db(), self.cell_m,
+                          elevation, capture.elevation_index)
         return SensingResult(scan, t1 / self.fs, delay, rng, power, valid, det.dft_evaluations, spec,
                              est.window_offset, self)
 

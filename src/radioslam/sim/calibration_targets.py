@@ -20,8 +20,8 @@ def calibration_ranges(radio: RadioConfig, targets: int | None = None, spacing_m
 
 
 def boresight_row(radio: RadioConfig) -> int:
-    """Row of orientation 0, codebook index 0 in the beam sweep (the array normal)."""
-    return radio.beams_per_side
+    """Row of orientation 0, codebook indices i = 0 and j = 0 in the beam sweep (the array normal)."""
+    return (radio.elevation_beams - 1) // 2 * radio.azimuth_beams + radio.beams_per_side
 
 
 def plate_simulator(radio: RadioConfig, range_m: float, mode: CaptureMode = CaptureMode.WAVEFORM,

@@ -27,7 +27,8 @@ def beam_path_gains(beams: BeamSet, paths: EchoPaths) -> np.ndarray:
     (:meth:`~radioslam.antenna.codebook.BeamSet.coupling`)."""
     leak = paths.kind == PathKind.LEAKAGE
     # the leakage's angle is NaN: its column is overwritten below
-    gain = (beams.two_way_gain(np.where(leak, 0.0, paths.angle)) if paths.beam_gain is None
+    elevation = None if paths.elevation is None else np.where(leak, 0.0, paths.elevation)
+    gain = (beams.two_way_gain(np.where(leak, 0.0, paths.angle), elevation) if paths.beam_gain is None
             else paths.beam_gain.astype(np.complex128)) * paths.amplitude
     gain[:, leak] = beams.coupling()[:, None] * paths.amplitude[leak]
     return gain

@@ -28,6 +28,7 @@ import numpy as np
 from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
 from radioslam.scene.model import Scene
 from radioslam.scene.raycast import cast_rays
+from radioslam.sim.elevated import elevated_diffuse_paths
 from radioslam.sim.facets import facet_paths
 
 
@@ -50,6 +51,9 @@ class EchoPaths:
     # (B, P) each path's gain on each beam where a backend computed it from its own element coefficients
     # (Sionna RT, :mod:`radioslam.sim.sionna_channel`); None: the codebook's gain at ``angle``
     beam_gain: np.ndarray | None = None
+    # (P,) terminal-frame elevation of each path where a channel traces in 3D (NaN for leakage); None: all
+    # horizontal, the 2D caster's flat paths
+    elevation: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.delay_s)
@@ -59,7 +63,8 @@ class EchoPaths:
         order = np.argsort(self.delay_s, kind="stable")
         return EchoPaths(self.delay_s[order], self.amplitude[order], self.angle[order], self.kind[order],
                          self.segment[order], self.point[order],
-                         None if self.beam_gain is None else self.beam_gain[:, order])
+                         None if self.beam_gain is None else self.beam_gain[:, order],
+                         None if self.elevation is None else self.elevation[order])
 
 
 def _echo(r, gain_wo_range, radio: RadioConfig):
@@ -124,12 +129,16 @@ def echo_paths(scene: Scene, pose: np.ndarray, radio: RadioConfig | None = None,
     pose = np.asarray(pose, dtype=np.float64)
     specular = facet_specular(scene, pose, radio) if radio.impairments.specular_facets else \
         specular_paths(scene, pose, radio)
-    parts = [diffuse_paths(scene, pose, radio), specular]
+    elevated = radio.elevation_beams > 1  # elevation beams: the 2.5D fan (:mod:`radioslam.sim.elevated`)
+    diffuse = elevated_diffuse_paths(scene, pose, radio) if elevated else diffuse_paths(scene, pose, radio)
+    elevations = [diffuse[5], np.zeros(len(specular[0]))] if elevated else []
+    parts = [diffuse[:5], specular]
     kinds = [np.full(len(p[0]), k) for p, k in zip(parts, (PathKind.DIFFUSE, PathKind.SPECULAR))]
     if leakage and np.isfinite(radio.isolation_db):
         parts.append(leakage_path(radio))
         kinds.append(np.array([PathKind.LEAKAGE]))
-    return _joined(parts, kinds)
+        elevations += [np.full(1, np.nan)] if elevated else []
+    return _joined(parts, kinds, np.concatenate(elevations) if elevated else None)
 
 
 def leakage_path(radio: RadioConfig):
@@ -139,9 +148,10 @@ def leakage_path(radio: RadioConfig):
             np.array([-1]), np.full((1, 2), np.nan))
 
 
-def _joined(parts, kinds) -> EchoPaths:
+def _joined(parts, kinds, elevation: np.ndarray | None = None) -> EchoPaths:
     tau, amp, ang, seg, pt = (np.concatenate(x) for x in zip(*parts))
-    return EchoPaths(tau, amp.astype(np.complex128), ang, np.concatenate(kinds).astype(np.int8), seg, pt)
+    return EchoPaths(tau, amp.astype(np.complex128), ang, np.concatenate(kinds).astype(np.int8), seg, pt,
+                     elevation=elevation)
 
 
 def leakage_paths(radio: RadioConfig) -> EchoPaths:

@@ -145,7 +145,10 @@ class Simulator:
                                                        row_blocks=min(radio.orientations, n_beams))
         common = dict(radio=radio, pose_index=pose_index, orientation=self.beams.orientation[self.rows],
                       beam_index=self.beams.index[self.rows], beam_angle_rad=self.beams.angle[self.rows],
-                      ssb_index=self.beams.slot[self.rows], symbol_indices=self.window_symbols, tx_bits=bits)
+                      beam_elevation_rad=self.beams.elevation[self.rows],
+                      elevation_index=self.beams.elevation_index[self.rows],
+                      ssb_index=self.schedule.ssb_index(self.beams.slot[self.rows]),
+                      symbol_indices=self.window_symbols, tx_bits=bits)
         if self.mode is CaptureMode.GRID:
             if radio.impairments.time_domain:
                 raise SimulationError("I/Q imbalance and the ADC act on the waveform: simulate in waveform mode",

@@ -19,8 +19,9 @@ element m (``cir``). The beam's gain is then (eq. (4), ϖ·b):
 
 w̃_i our DFT weights in Sionna's element order (our element n at −n·d along the row: Sionna's element
 N − 1 − n), e(ψ) = cos^{q/2} ψ the element pattern off the array normal (``element_exponent`` q, zero
-behind), and c(ε) = |Σ_r e^{jπ r sin ε}|/N the elevation factor of the 8×8 array's N rows fed alike
-(1 in the horizontal plane, so a wall at the terminal's height sees today's beams). With
+behind), and c(ε) = |v_j^H a(sin ε/2)|/√N the factor of the 8×8 array's N rows steered by the beam's
+elevation row j (:meth:`~radioslam.antenna.codebook.BeamSet.vertical_factor`; for the flat scan's j = 0
+the rows fed alike, 1 in the horizontal plane, so a wall at the terminal's height sees today's beams). With
 ``synthetic_array`` (default) Sionna traces from each array's centre and applies the elements' phases
 as plane waves (exact in the far field, beyond 2D²/λ ≈ 0.26 m here); without it every element pair is
 traced (spherical wavefronts, 64× the paths).
@@ -88,14 +89,6 @@ def beam_gains(beams: BeamSet, coefficients: np.ndarray, orientation: int) -> np
     return gains
 
 
-def elevation_factor(elevation: np.ndarray, rows: int) -> np.ndarray:
-    """|Σ_r e^{jπ r sin ε}|/N of N rows at λ/2 fed alike: 1 at ε = 0."""
-    phase = np.pi * np.sin(elevation)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = np.abs(np.sin(rows * phase / 2) / (rows * np.sin(phase / 2)))
-    return np.where(np.abs(np.sin(phase / 2)) < 1e-12, 1.0, ratio)
-
-
 def element_factor(azimuth: np.ndarray, elevation: np.ndarray, exponent: float) -> np.ndarray:
     """cos^{q/2} ψ of the angle ψ off the array normal (amplitude, one way), 0 behind the array."""
     cos_psi = np.cos(elevation) * np.cos(azimuth)
@@ -119,15 +112,16 @@ def check_scene(scene: Scene) -> Mesh | None:
 class SionnaChannel:
     """Echo paths of a scene's poses from Sionna RT (built once per scene)."""
 
-    def __init__(self, scene: Scene, radio: RadioConfig, options: SionnaOptions = SionnaOptions()):
+    def __init__(self, scene: Scene, radio: RadioConfig, options: SionnaOptions | None = None):
         self.rt, self.mi = import_sionna()
+        options = options or SionnaOptions(samples=radio.sionna_samples)
         self.radio, self.options, self.beams = radio, options, BeamSet.from_config(radio)
         self.scene = self._sionna_scene(scene, check_scene(scene))
         self.solver = self.rt.PathSolver()
 
     def _sionna_scene(self, scene: Scene, mesh: Mesh | None):
         rt, radio = self.rt, self.radio
-        out = rt.load_scene(scene.spec.mitsuba) if mesh is None else self._extruded_scene(scene, mesh)
+        out = self._loaded_scene(scene) if mesh is None else self._extruded_scene(scene, mesh)
         out.frequency = radio.carrier_hz
         array = dict(num_rows=1, num_cols=radio.array_elements, vertical_spacing=0.5, horizontal_spacing=0.5,
                      pattern="iso", polarization="V")
@@ -135,6 +129,19 @@ class SionnaChannel:
         for k in range(radio.orientations):
             out.add(rt.Transmitter(f"tx{k}", position=[0.0, 0.0, radio.height_m]))
             out.add(rt.Receiver(f"rx{k}", position=[0.0, 0.0, radio.height_m]))
+        return out
+
+    def _loaded_scene(self, scene: Scene):
+        """Sionna's scene of a Mitsuba file, each radio material given its class's scattering (the file's
+        bsdfs carry none: a monostatic terminal would see its walls only at normal incidence)."""
+        out = self.rt.load_scene(scene.spec.mitsuba)
+        used = {m.itu.value: m for m in scene.materials if m.itu is not None}  # the file's own win (last)
+        for name, radio_material in out.radio_materials.items():  # Sionna names them itu_CLASS
+            material = used.get(name.removeprefix("mat-").removeprefix("itu_"))
+            if material is not None:
+                radio_material.scattering_coefficient = material.scattering
+                radio_material.scattering_pattern = self.rt.DirectivePattern(
+                    alpha_r=max(1, int(round(material.directivity))))
         return out
 
     def _extruded_scene(self, scene: Scene, mesh: Mesh):
@@ -203,11 +210,11 @@ class SionnaChannel:
         valid = (delay > 0) & np.any(coefficients != 0, axis=(0, 1))
         coefficients = np.moveaxis(coefficients[..., valid], -1, 0)  # (P, rx_ant, tx_ant)
         yaw = pose[2] + k * 2 * np.pi / self.radio.orientations
-        q, rows = self.radio.element_exponent, self.radio.array_elements
-        factor = np.ones(int(valid.sum()))
+        q = self.radio.element_exponent
+        factor = np.ones((len(self.beams), int(valid.sum())))
         for theta, phi in ((theta_t[valid], phi_t[valid]), (theta_r[valid], phi_r[valid])):
-            elevation = np.pi / 2 - theta
-            factor *= element_factor(phi - yaw, elevation, q) * elevation_factor(elevation, rows)
+            elevation = np.pi / 2 - theta  # the rows' factor of each beam's elevation row j, then the element's
+            factor *= self.beams.vertical_factor(elevation) * element_factor(phi - yaw, elevation, q)
         gains = beam_gains(self.beams, coefficients, k) * factor
         first = vertices[0, k, k][valid]  # the first bounce: where the echo comes from
         diffuse = np.any((kinds[:, k, k][:, valid] & DIFFUSE_FLAG) != 0, axis=0)

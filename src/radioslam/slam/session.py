@@ -85,9 +85,9 @@ class SlamSession:
         """Scan k (the next one): its pose now."""
         cfg, k, tick = self.cfg, len(self.steps), time.perf_counter()
         front_end, loop_closer, back_end, forks = self.front_end, self.loop_closer, self.back_end, self.forks
-        # 1. the scan's points (thinned where there are too many, or too far) and the specular normal of the
-        #    wall each came from
-        scan, thinned = thin_scan(scan, cfg.scan.max_points, cfg.scan.max_range_m, cfg.grid.resolution_m)
+        # 1. the scan's points (its horizontal slice, thinned where there are too many, or too far) and the
+        #    specular normal of the wall each came from
+        scan, thinned = thin_scan(scan.horizontal(), cfg.scan.max_points, cfg.scan.max_range_m, cfg.grid.resolution_m)
         self.enough_points |= len(scan) >= cfg.scan.min_points
         points = prepare_points(scan, cfg.scan, cfg.grid)
         self.sightings.append(points.sightings)

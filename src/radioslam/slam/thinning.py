@@ -34,4 +34,4 @@ def thin_scan(scan: Scan, max_points: int, max_range_m: float, cell_m: float) ->
         return scan, ""
     far = int(np.sum(scan.range_m > max_range_m))
     note = f"{len(scan):,} points thinned to {len(keep):,}" + (f" ({far:,} beyond {max_range_m:g} m)" if far else "")
-    return Scan(*(getattr(scan, f)[keep] for f in ("range_m", "angle_rad", "power_db", "beam", "orientation"))), note
+    return scan.select(keep), note
