@@ -39,9 +39,10 @@ def sibling_rows(orientation: np.ndarray, beam_index: np.ndarray, elevation_inde
 
 def detection_elevations(spec: RangeSpectrum, window_offset: np.ndarray, lag: np.ndarray, valid: np.ndarray,
                          orientation: np.ndarray, beam_index: np.ndarray, elevation_index: np.ndarray,
-                         n_elements: int, bits: int) -> np.ndarray:
-    """û_z (B, M) of every detection (NaN where not valid): each row's profile at the detection's delay
-    (its own window offset), matched against the rows' patterns."""
+                         n_elements: int, bits: int) -> tuple[np.ndarray, np.ndarray]:
+    """û_z (B, M) of every detection (NaN where not valid), each row's profile at the detection's delay
+    (its own window offset) matched against the rows' patterns; and whether the detecting row is the one
+    nearest û_z (within half a row step, (B, M)), where the echo belongs."""
     rows_j = np.unique(elevation_index)
     siblings = sibling_rows(orientation, beam_index, elevation_index, rows_j)  # (B, J)
     delay = window_offset[:, None] + np.where(valid, lag, 0.0)  # (B, M) in samples from the window start
@@ -57,4 +58,8 @@ def detection_elevations(spec: RangeSpectrum, window_offset: np.ndarray, lag: np
     score = magnitude @ pattern  # (B, M, U)
     own = 2.0 * elevation_index / 2**bits  # the detecting beam's u_z: the echo lies in its main lobe
     score[np.abs(u[None, :] - own[:, None])[:, None, :] > step] = -np.inf
-    return np.where(valid, u[np.argmax(score, axis=-1)], np.nan)
+    estimate = np.where(valid, u[np.argmax(score, axis=-1)], np.nan)
+    # the row nearest the estimate keeps the echo: a far row sees it through a sidelobe (the per-row point
+    # threshold would keep it there, its row's strongest), its estimate pinned to that row's window edge
+    nearest = valid & (np.abs(estimate - own[:, None]) <= step / 2 + GRID_STEP)
+    return estimate, nearest

@@ -145,21 +145,22 @@ class Receiver:
         return self.cfg.point_floor_db if same_range else None
 
     def directions(self, capture: Capture, spec: RangeSpectrum, gate: LagGate, window_offset: np.ndarray,
-                   lag: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Terminal-frame azimuth and elevation of each detection: its beam's for a flat scan (B,); with
-        elevation rows (B, M), u_z between the rows' leakage-cancelled profiles
-        (:mod:`radioslam.sensing.elevation`), u_y the beam's, the azimuth on the cone they give."""
+                   lag: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Terminal-frame azimuth and elevation of each detection, and the detections a point keeps: for a
+        flat scan its beam's (B,), all; with elevation rows (B, M), u_z between the rows' leakage-cancelled
+        profiles (:mod:`radioslam.sensing.elevation`), u_y the beam's, the azimuth on the cone they give,
+        and only the detections of the row nearest their u_z."""
         if not np.any(capture.elevation_index != 0):
-            return capture.beam_angle_rad, capture.beam_elevation_rad
+            return capture.beam_angle_rad, capture.beam_elevation_rad, valid
         radio = self.radio
-        u_z = detection_elevations(leakage_cancelled(spec, gate), window_offset, lag, valid, capture.orientation,
-                                   capture.beam_index,
-                                   capture.elevation_index, radio.array_elements, radio.codebook_bits)
+        u_z, nearest = detection_elevations(leakage_cancelled(spec, gate), window_offset, lag, valid,
+                                            capture.orientation, capture.beam_index, capture.elevation_index,
+                                            radio.array_elements, radio.codebook_bits)
         u_y = np.broadcast_to((2.0 * capture.beam_index / 2**radio.codebook_bits)[:, None], u_z.shape)
         u_z = np.clip(np.nan_to_num(u_z), -np.sqrt(1 - u_y**2) + 1e-9, np.sqrt(1 - u_y**2) - 1e-9)
         normal = capture.orientation * (2 * np.pi / radio.orientations)
         azimuth = normal[:, None] + np.arctan2(u_y, np.sqrt(1.0 - u_y**2 - u_z**2))
-        return np.angle(np.exp(1j * azimuth)), np.arcsin(u_z)
+        return np.angle(np.exp(1j * azimuth)), np.arcsin(u_z), nearest
 
     def to_range(self, delay_s: np.ndarray) -> np.ndarray:
         """Range from T1 + T2 after the calibrated hardware delay (bistatic, eq. (11)'s T_O inverted)."""
@@ -180,9 +181,9 @@ class Receiver:
         rng = np.where(valid, self.to_range(np.nan_to_num(delay)), np.nan)
         power = np.abs(det.amplitude) ** 2
         # 5. with elevation beams, each detection's elevation from the rows' responses at its delay
-        azimuth, elevation = self.directions(capture, spec, gate, est.window_offset, det.lag, valid)
+        azimuth, elevation, located = self.directions(capture, spec, gate, est.window_offset, det.lag, valid)
         # 6. point cloud: normalize by the scan's (row's) peak, keep what clears the threshold
-        scan = build_scan(rng, power, valid, azimuth, capture.beam_index, capture.orientation,
+        scan = build_scan(rng, power, located, azimuth, capture.beam_index, capture.orientation,
                           self.point_threshold_db(), self.point_floor_db(), self.cell_m,
                           elevation, capture.elevation_index)
         return SensingResult(scan, t1 / self.fs, delay, rng, power, valid, det.dft_evaluations, spec,

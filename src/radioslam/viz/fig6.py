@@ -9,7 +9,7 @@ import numpy as np
 from radioslam.eval.trajectory_metrics import align
 from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.se2 import transform_points
-from radioslam.viz.figures import _save, plt
+from radioslam.viz.figures import plt, save_figure
 
 
 def _world(poses: np.ndarray, scans: list[Scan]) -> np.ndarray:
@@ -43,4 +43,4 @@ def fig6_figure(path, segments: np.ndarray, truth: np.ndarray, odometry: np.ndar
     axes[0].set_ylabel("y (m)")
     if title:
         fig.suptitle(title)
-    _save(fig, path)
+    save_figure(fig, path)

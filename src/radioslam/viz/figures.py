@@ -13,7 +13,7 @@ import numpy as np  # noqa: E402
 from radioslam.io.atomic import atomic_path  # noqa: E402
 
 
-def _save(fig, path: str | Path) -> None:
+def save_figure(fig, path: str | Path) -> None:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=130, bbox_inches="tight")
     plt.close(fig)
@@ -41,7 +41,7 @@ def polar_heatmap_and_points(path, beam_angle: np.ndarray, profile_range_m: np.n
     ax2.set_ylabel("y (m)")
     ax2.set_title(f"radio point cloud ({len(points_xy)} points)")
     fig.colorbar(sc2, ax=ax2, fraction=0.04, label="power (dB)")
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def table1_figure(path, result) -> None:
@@ -61,7 +61,7 @@ def table1_figure(path, result) -> None:
     b.set_ylabel("range error (mm)")
     b.set_title(f"point target, worst RMSE/CRB = {result.crb_ratio:.2f}")
     b.legend()
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 FIG5_CAPTION = ("MF sidelobes (Hann taper, >4 cells from the peak). 16-QAM's random |x|² leaves data "
@@ -86,7 +86,7 @@ def fig5_figure(path, result) -> None:
     b.set_title(f"one trial at {result.snr_db[-1]:g} dB")
     b.legend(fontsize=7)
     fig.text(0.01, -0.08, FIG5_CAPTION, wrap=True, fontsize=8)
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def fig8_figure(path, result, ranges_m) -> None:
@@ -105,4 +105,4 @@ def fig8_figure(path, result, ranges_m) -> None:
     ax.set_title(f"Fig. 8: targets at 8 m and 9 m (gains 1, 0.3); detect rate PDP "
                  f"{result.detect_rate_pdp:.2f}, MF {result.detect_rate_mf:.2f}")
     ax.legend(fontsize=8)
-    _save(fig, path)
+    save_figure(fig, path)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from radioslam.slam.status import ScanStatus
-from radioslam.viz.figures import _save, plt
+from radioslam.viz.figures import plt, save_figure
 
 COLOURS = {ScanStatus.MATCHED: "#4caf50", ScanStatus.AMBIGUOUS: "#ffb300", ScanStatus.DEGENERATE: "#29b6f6",
            ScanStatus.RELOCALIZED: "#ab47bc", ScanStatus.PREDICTED: "#e53935", ScanStatus.SKIPPED: "#9e9e9e"}
@@ -24,4 +24,4 @@ def status_strip(path, statuses: list[ScanStatus], scores: np.ndarray) -> None:
     for status, colour in COLOURS.items():
         strip.bar([0], [0], color=colour, label=f"{status.value} ({sum(s is status for s in statuses)})")
     strip.legend(ncol=6, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.9), frameon=False)
-    _save(fig, path)
+    save_figure(fig, path)

@@ -26,7 +26,7 @@ from radioslam.io.atomic import atomic_path  # noqa: E402
 SUCCESS_M = 0.2  # ATE of a successful run (the robustness benchmark's)
 
 
-def _save(fig, path: Path) -> None:
+def save_figure(fig, path: Path) -> None:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=130, bbox_inches="tight")
     plt.close(fig)
@@ -49,7 +49,7 @@ def ate_vs_snr(ok: pd.DataFrame, path: Path) -> bool:
     ax.set(xlabel="SNR (dB)", ylabel="ATE RMSE (m)", title="ATE against SNR: median, 10–90 % band",
            yscale="log" if (ok["ate_rmse_m"] > 0).all() else "linear")
     ax.legend(fontsize=8, loc="upper right")
-    _save(fig, path)
+    save_figure(fig, path)
     return True
 
 
@@ -67,7 +67,7 @@ def ranging_vs_crb(ok: pd.DataFrame, path: Path) -> bool:
     ax.set(xlabel="SNR (dB)", ylabel="ranging RMSE (m)", yscale="log",
            title="ranging RMSE of specular echoes against the CRB")
     ax.legend(fontsize=8)
-    _save(fig, path)
+    save_figure(fig, path)
     return True
 
 
@@ -83,7 +83,7 @@ def success_by_motion(table: pd.DataFrame, path: Path) -> bool:
         ax.text(x, 100 * mean + 1, f"{100 * mean:.0f} % of {size}", ha="center", fontsize=8)
     ax.set(ylabel=f"runs with ATE ≤ {SUCCESS_M} m (%)", ylim=(0, 115), title="success rate per motion class")
     ax.tick_params(axis="x", labelrotation=30)
-    _save(fig, path)
+    save_figure(fig, path)
     return True
 
 
