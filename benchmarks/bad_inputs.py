@@ -183,6 +183,11 @@ def cases(one_pose: Path, two_pose: Path) -> list[Case]:
         Case("radio: frames 10000", _radio("frames: 10000")),
         Case("radio: array_elements 1e6", _radio("array_elements: 1000000")),
         Case("radio: ray_spacing_deg 1e-7", _radio("ray_spacing_deg: 1.0e-7")),
+        Case("radio: elevation_beams even", _radio("elevation_beams: 4")),
+        Case("radio: elevation beams off the visible region", _radio("elevation_beams: 15")),
+        Case("mitsuba scene with elevation beams on the built-in caster", lambda d: [
+            "simulate", str(Path(__file__).resolve().parents[1] / "examples" / "furnished-room" / "room.yaml"),
+            "--out", str(d / "o")]),
         # command lines
         Case("cli: --snr-db 1e9", lambda d: ["simulate", str(_scene(d, ROOM)), "--out", str(d / "o"),
                                              "--snr-db", "1e9"]),

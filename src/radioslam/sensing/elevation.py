@@ -10,7 +10,9 @@ the magnitudes m_j = |F_j(τ)| of every row's range profile at the detection's d
 on a grid of u 1/1000 apart within one row step of the detecting beam's own u_z (the echo is in its
 main lobe: a floor and a ceiling at the same slant range echo alike on rows −j and +j, which a single
 scatterer's fit over every row cannot tell apart), and from half a step below the lowest beam to half a
-step above the highest (beyond them the shape of g no longer tells u). The beam's own u_z alone would put a floor echo,
+step above the highest (beyond them the shape of g no longer tells u). A detection makes a point only
+where the fit peaks inside that window (on its edge the echo lies outside, seen through a sidelobe:
+a floor too steep for the lowest row) and on the row nearest û_z. The beam's own u_z alone would put a floor echo,
 strongest at the steep lower edge of a low beam's footprint, at that beam's centre: 0.66 m high on
 average on the extruded paper-cnv (7 rows); see docs/notes.md, session 24.
 """
@@ -57,9 +59,14 @@ def detection_elevations(spec: RangeSpectrum, window_offset: np.ndarray, lag: np
     pattern /= np.linalg.norm(pattern, axis=0, keepdims=True)
     score = magnitude @ pattern  # (B, M, U)
     own = 2.0 * elevation_index / 2**bits  # the detecting beam's u_z: the echo lies in its main lobe
-    score[np.abs(u[None, :] - own[:, None])[:, None, :] > step] = -np.inf
-    estimate = np.where(valid, u[np.argmax(score, axis=-1)], np.nan)
-    # the row nearest the estimate keeps the echo: a far row sees it through a sidelobe (the per-row point
-    # threshold would keep it there, its row's strongest), its estimate pinned to that row's window edge
-    nearest = valid & (np.abs(estimate - own[:, None]) <= step / 2 + GRID_STEP)
+    window = np.abs(u[None, :] - own[:, None]) <= step  # (B, U)
+    score[~window[:, None, :]] = -np.inf
+    best = np.argmax(score, axis=-1)  # (B, M)
+    estimate = np.where(valid, u[best], np.nan)
+    # the echo is where the fit peaks inside the window: a maximum on the window's edge (or beyond the
+    # rows' span) says it lies outside, seen through a sidelobe; and the row nearest the estimate keeps it
+    # (a neighbour's detection of the same echo would be a twin; the per-row threshold keeps both)
+    first, last = np.argmax(window, axis=1), len(u) - 1 - np.argmax(window[:, ::-1], axis=1)
+    interior = (best > first[:, None]) & (best < last[:, None])
+    nearest = valid & interior & (np.abs(estimate - own[:, None]) <= step / 2 + GRID_STEP)
     return estimate, nearest

@@ -50,6 +50,9 @@ def check_channel(kind: ChannelKind, scene: Scene, source: str | None = None) ->
     """Before anything is written: the backend of ``kind`` can run on ``scene`` (Sionna RT installed, the
     scene extruded, every material with an ITU class), or a one-line error naming what is missing (and
     the scene file, ``source``)."""
+    if ChannelKind(kind) is ChannelKind.BUILTIN and scene.spec.mitsuba is not None and scene.radio.elevation_beams > 1:
+        raise SimulationError("the built-in caster knows a mitsuba scene only as its horizontal slice: elevation "
+                              "beams need --channel sionna", file=source, field="--channel")
     if ChannelKind(kind) is ChannelKind.BUILTIN and scene.spec.mitsuba is not None:
         used = {scene.materials[m].itu for m in np.unique(scene.segment_material)}
         unknown = sorted(c.value for c in used - BUILTIN_BY_ITU.keys())
