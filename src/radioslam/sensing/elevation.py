@@ -11,8 +11,8 @@ on a grid of u 1/1000 apart within one row step of the detecting beam's own u_z 
 main lobe: a floor and a ceiling at the same slant range echo alike on rows −j and +j, which a single
 scatterer's fit over every row cannot tell apart), and from half a step below the lowest beam to half a
 step above the highest (beyond them the shape of g no longer tells u). A detection makes a point only
-where the fit peaks inside that window (on its edge the echo lies outside, seen through a sidelobe:
-a floor too steep for the lowest row) and on the row nearest û_z. The beam's own u_z alone would put a floor echo,
+where its row's magnitude is within 6 dB of the strongest row's at that delay (adjacent rows cross at
+−3.9 dB): a row further off sees the echo through a sidelobe. The beam's own u_z alone would put a floor echo,
 strongest at the steep lower edge of a low beam's footprint, at that beam's centre: 0.66 m high on
 average on the extruded paper-cnv (7 rows); see docs/notes.md, session 24.
 """
@@ -25,6 +25,7 @@ from radioslam.antenna.codebook import vertical_factors
 from radioslam.sensing.profile import RangeSpectrum
 
 GRID_STEP = 1e-3
+MAIN_LOBE_AMPLITUDE = 10 ** (-6 / 20)  # a detecting row within 6 dB of the strongest row keeps the echo
 
 
 def sibling_rows(orientation: np.ndarray, beam_index: np.ndarray, elevation_index: np.ndarray,
@@ -43,8 +44,8 @@ def detection_elevations(spec: RangeSpectrum, window_offset: np.ndarray, lag: np
                          orientation: np.ndarray, beam_index: np.ndarray, elevation_index: np.ndarray,
                          n_elements: int, bits: int) -> tuple[np.ndarray, np.ndarray]:
     """û_z (B, M) of every detection (NaN where not valid), each row's profile at the detection's delay
-    (its own window offset) matched against the rows' patterns; and whether the detecting row is the one
-    nearest û_z (within half a row step, (B, M)), where the echo belongs."""
+    (its own window offset) matched against the rows' patterns; and whether the detecting row sees the echo
+    in its main lobe (within 6 dB of the strongest row, (B, M))."""
     rows_j = np.unique(elevation_index)
     siblings = sibling_rows(orientation, beam_index, elevation_index, rows_j)  # (B, J)
     delay = window_offset[:, None] + np.where(valid, lag, 0.0)  # (B, M) in samples from the window start
@@ -63,10 +64,9 @@ def detection_elevations(spec: RangeSpectrum, window_offset: np.ndarray, lag: np
     score[~window[:, None, :]] = -np.inf
     best = np.argmax(score, axis=-1)  # (B, M)
     estimate = np.where(valid, u[best], np.nan)
-    # the echo is where the fit peaks inside the window: a maximum on the window's edge (or beyond the
-    # rows' span) says it lies outside, seen through a sidelobe; and the row nearest the estimate keeps it
-    # (a neighbour's detection of the same echo would be a twin; the per-row threshold keeps both)
-    first, last = np.argmax(window, axis=1), len(u) - 1 - np.argmax(window[:, ::-1], axis=1)
-    interior = (best > first[:, None]) & (best < last[:, None])
-    nearest = valid & interior & (np.abs(estimate - own[:, None]) <= step / 2 + GRID_STEP)
+    # a far row sees a strong echo through a sidelobe (the per-row point threshold would keep it there, its
+    # row's strongest): a point only where the detecting row is within 6 dB of the strongest row at that delay
+    own_row = np.searchsorted(rows_j, elevation_index)  # (B,)
+    own_magnitude = np.take_along_axis(magnitude, np.broadcast_to(own_row[:, None, None], (b, m, 1)), axis=-1)[..., 0]
+    nearest = valid & (own_magnitude >= MAIN_LOBE_AMPLITUDE * magnitude.max(axis=-1))
     return estimate, nearest
