@@ -72,7 +72,7 @@ def height_error_summary(match: SurfaceMatch) -> dict:
     90th percentile |e|, mean (bias) and the 3D distance median over every point."""
     e = match.height_error_m[match.horizontal]
     if not len(e):
-        return {"points": 0}
+        return {"points": 0, "distance_median_m": float(np.median(match.distance_m))}
     surfaces = np.round(match.surface_height_m[match.horizontal], 2)
     return {**_spread(e), "distance_median_m": float(np.median(match.distance_m)),
             "by_surface_height_m": {f"{z:g}": _spread(e[surfaces == z]) for z in np.unique(surfaces)}}
