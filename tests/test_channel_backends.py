@@ -25,6 +25,10 @@ ROOM = {"version": 1, "name": "room",
         "trajectory": {"poses": [[0.0, 0.0, 0.0]]}}
 
 
+SIONNA_SKIP = ("Sionna RT is not usable here; to run these tests: pip install 'radioslam[sionna]' and "
+               "apt install libllvm19 (or set DRJIT_LIBLLVM_PATH to an LLVM ≥ 16)")
+
+
 def _sionna_available() -> bool:
     if importlib.util.find_spec("sionna") is None:
         return False
@@ -133,7 +137,7 @@ def test_sionna_missing_is_one_line(tmp_path):
     assert not (tmp_path / "run").exists()  # refused before anything is written
 
 
-@pytest.mark.skipif(not _sionna_available(), reason="needs Sionna RT and an LLVM (pip install 'radioslam[sionna]')")
+@pytest.mark.skipif(not _sionna_available(), reason=SIONNA_SKIP)
 @pytest.mark.parametrize("yaw", [0.0, 0.3, 2.0])
 def test_sionna_matches_the_caster_on_a_plate(yaw):
     """A metal plate 3 m ahead: on the beams where the specular echo is the strongest path in both
@@ -224,7 +228,7 @@ def test_bad_mitsuba_scene_is_one_error(tmp_path, xml, reason):
     assert reason in info.value.reason and str(tmp_path / "bad.xml") in info.value.one_line()
 
 
-@pytest.mark.skipif(not _sionna_available(), reason="needs Sionna RT and an LLVM (pip install 'radioslam[sionna]')")
+@pytest.mark.skipif(not _sionna_available(), reason=SIONNA_SKIP)
 def test_sionna_reads_the_mitsuba_scene_as_the_extruded_one(tmp_path):
     """The same room as a Mitsuba file and as an extruded YAML scene: Sionna's specular echoes agree."""
     walled = _write_mitsuba(tmp_path)
@@ -240,7 +244,7 @@ def test_sionna_reads_the_mitsuba_scene_as_the_extruded_one(tmp_path):
     np.testing.assert_array_equal(delays[0], delays[1])
 
 
-@pytest.mark.skipif(not _sionna_available(), reason="needs Sionna RT and an LLVM (pip install 'radioslam[sionna]')")
+@pytest.mark.skipif(not _sionna_available(), reason=SIONNA_SKIP)
 def test_run_on_the_sionna_channel_end_to_end(tmp_path):
     """`radioslam run --channel sionna` on an extruded room: scans, a trajectory and metrics, the channel
     in run.json."""
@@ -259,6 +263,14 @@ def test_run_on_the_sionna_channel_end_to_end(tmp_path):
     manifest = json.loads((out / "run.json").read_text())
     assert manifest["stages"]["simulate"]["settings"]["channel"] == "sionna"
     assert len(list((out / "scans").glob("*.ply"))) == 3
+    # each pose's trace kept in traces/, and a new run of the directory (another seed) reads them back
+    traces = {f.name: f.stat().st_mtime_ns for f in (out / "traces").glob("*.npz")}
+    assert len(traces) == 3
+    done = subprocess.run([sys.executable, "-m", "radioslam.cli", "simulate", str(scene), "--out", str(out),
+                           "--channel", "sionna", "--seed", "4", "--save-iq"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert {f.name: f.stat().st_mtime_ns for f in (out / "traces").glob("*.npz")} == traces
+    assert not list((out / "scans").glob("*.ply")) and len(list((out / "captures").glob("*.sigmf-data"))) == 3
 
 
 def test_collinear_pieces_join_and_corners_stay():
@@ -292,3 +304,56 @@ def test_a_memory_estimate_builds_no_channel(tmp_path):
     with pytest.raises(SimulationError) as info:
         check_channel("builtin", scene, "room.yaml")
     assert info.value.file == "room.yaml" and "brick" in info.value.reason
+
+
+def test_trace_cache_round_trip_and_damaged_entries(tmp_path):
+    """Arrays stored under a key read back bit for bit; a truncated archive or a missing one is a miss
+    (traced again), not an error; a key that is no hex digest is refused (it names a file)."""
+    from radioslam.io.trace_cache import TraceCache
+
+    cache, key = TraceCache(tmp_path / "traces"), "ab" * 32
+    arrays = {"tau": np.random.default_rng(0).random((4, 7)), "coefficients": np.ones((4, 8, 8, 7), np.complex64),
+              "diffuse": np.zeros((4, 7), bool)}
+    assert cache.load(key) is None
+    cache.store(key, arrays)
+    back = cache.load(key)
+    assert back.keys() == arrays.keys() and cache.hits == 1 and cache.stored == 1
+    for name in arrays:
+        assert back[name].dtype == arrays[name].dtype
+        np.testing.assert_array_equal(back[name], arrays[name])
+    path = cache.path(key)
+    path.write_bytes(path.read_bytes()[:100])
+    assert cache.load(key) is None
+    assert [p.name for p in cache.directory.iterdir()] == [path.name]  # no temporary left
+    with pytest.raises(ValueError):
+        cache.path("../x")
+
+
+@pytest.mark.skipif(not _sionna_available(), reason=SIONNA_SKIP)
+def test_sionna_trace_is_read_back_from_the_cache(tmp_path):
+    """A second channel on the same cache traces nothing and gives the same paths bit for bit (a Sionna
+    trace itself varies by a path or so from call to call); the key changes with the pose, the scene's
+    materials and the carrier, not with the codebook (applied after the trace)."""
+    from radioslam.io.trace_cache import TraceCache
+    from radioslam.sim.sionna_channel import SionnaChannel
+
+    spec = {**ROOM, "extrude": {"height_m": 3.0}, "radio": {"sionna_samples": 5000}}
+    scene = scene_from_mapping(spec)
+    first = SionnaChannel(scene, scene.radio, cache=TraceCache(tmp_path))
+    paths = first.paths(scene.poses[0])
+    cache = TraceCache(tmp_path)
+    again = SionnaChannel(scene, scene.radio, cache=cache)
+    again.trace = None  # a trace would fail: every array must come from the cache
+    repeat = again.paths(scene.poses[0])
+    assert cache.hits == 1 and len(list(tmp_path.glob("*.npz"))) == 1
+    for name in ("delay_s", "amplitude", "angle", "kind", "point", "beam_gain"):
+        np.testing.assert_array_equal(getattr(repeat, name), getattr(paths, name))
+    key = first.trace_key(scene.poses[0])
+    assert first.trace_key(scene.poses[0] + [0, 0, 1e-9]) != key
+    rough = {"reflectivity": 0.5, "scattering": 0.5, "directivity": 3.0, "itu": "concrete"}
+    scattering = scene_from_mapping({**spec, "materials": {"concrete": rough}})
+    assert SionnaChannel(scattering, scattering.radio).trace_key(scene.poses[0]) != key
+    carrier = scene.with_radio(carrier_hz=27e9)
+    assert SionnaChannel(carrier, carrier.radio).trace_key(scene.poses[0]) != key
+    rows = scene_from_mapping({**spec, "radio": {"sionna_samples": 5000, "element_exponent": 2.0}})
+    assert SionnaChannel(rows, rows.radio).trace_key(scene.poses[0]) == key

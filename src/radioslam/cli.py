@@ -80,8 +80,7 @@ def simulate(
     """Simulate a scene: scene.yaml, ground_truth.tum, calibration.json and, with --save-iq, SigMF captures
     (a new run: whatever run the directory held is replaced)."""
     from radioslam.io import write_capture
-    from radioslam.pipeline import simulate_stage
-    from radioslam.sim import Simulator
+    from radioslam.pipeline import scene_simulator, simulate_stage
 
     def captures(loaded, run, kept: set[str]) -> None:
         from radioslam.io.manifest import RunManifest
@@ -94,7 +93,7 @@ def simulate(
         done = frozenset(k for k in range(len(loaded.poses)) if recorded(k))
         with progress() as bar:
             task = bar.add_task("simulating", total=len(loaded.poses), completed=len(done))
-            for capture in Simulator.from_scene(loaded, channel=channel).simulate(seed, skip=done):
+            for capture in scene_simulator(loaded, run, channel).simulate(seed, skip=done):
                 base = run.capture_base(capture.pose_index)
                 write_capture(capture, base)
                 RunManifest(run.root).record("simulate", [data_path(base), meta_path(base)])

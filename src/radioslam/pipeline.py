@@ -28,6 +28,7 @@ from radioslam.io.ply import read_map_points
 from radioslam.io.ros_map import FREE, OCCUPIED, UNKNOWN, read_ros_map, write_ros_map
 from radioslam.io.rundir import RunDir
 from radioslam.io.slam_summary import read_slam_summary
+from radioslam.io.trace_cache import TraceCache
 from radioslam.scene import Scene, load_scene, scene_to_yaml
 from radioslam.scene.extrude import scene_mesh
 from radioslam.sensing import Receiver, SensingConfig, estimate_hardware_delay
@@ -102,6 +103,11 @@ def simulate_stage(scene_name: str, out: Path, seed: int, snr_db: float | None, 
     return scene, run, cal
 
 
+def scene_simulator(scene: Scene, run: RunDir, channel: ChannelKind = ChannelKind.BUILTIN) -> Simulator:
+    """The simulator of a run's scene; a ray tracer's paths are kept in the run's traces/ (issue #16)."""
+    return Simulator.from_scene(scene, channel=channel, trace_cache=TraceCache(run.traces))
+
+
 def sensing_settings(sensing: SensingConfig | None, cal, calibration: Path) -> dict:
     """What run.json records of a sense stage: the receiver's settings and the calibration it used."""
     return {"sensing": (sensing or SensingConfig()).model_dump(mode="json"), "calibration": str(calibration),
@@ -127,7 +133,7 @@ def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | No
         for _ in done:
             if advance:
                 advance()
-        captures = Simulator.from_scene(scene, channel=channel).simulate(seed, skip=done)
+        captures = scene_simulator(scene, run, channel).simulate(seed, skip=done)
         for _ in range(len(scene.poses) - len(done)):
             tick = time.perf_counter()
             capture = next(captures)

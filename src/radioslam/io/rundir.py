@@ -27,6 +27,12 @@ class RunDir:
     def captures(self) -> Path:
         return self.root / "captures"
 
+    @property
+    def traces(self) -> Path:
+        """A ray tracer's paths per pose (:mod:`radioslam.io.trace_cache`): no run's output, kept when a new
+        run replaces the old one (each file is named by what its trace depends on)."""
+        return self.root / "traces"
+
     def capture_base(self, pose_index: int) -> Path:
         """``captures/NNNN`` (add ``.sigmf-meta`` / ``.sigmf-data``)."""
         return self.captures / f"{pose_index:04d}"

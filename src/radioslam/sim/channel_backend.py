@@ -35,14 +35,17 @@ class BuiltinChannel:
         return echo_paths(self.scene, pose, self.radio, leakage)
 
 
-def make_channel(kind: ChannelKind, scene: Scene, radio: RadioConfig | None = None) -> ChannelBackend:
+def make_channel(kind: ChannelKind, scene: Scene, radio: RadioConfig | None = None,
+                 trace_cache=None) -> ChannelBackend:
     """The backend of ``kind`` for ``scene`` (its own radio unless ``radio`` is given); Sionna RT is
-    imported only here, and its absence is a one-line error saying how to install it."""
+    imported only here, and its absence is a one-line error saying how to install it. Sionna's traces
+    are kept in ``trace_cache`` (a :class:`~radioslam.sim.sionna_channel.TraceStore`) when one is given;
+    the caster's are not (it traces a pose faster than an archive of its paths is read)."""
     radio = radio or scene.radio
     if ChannelKind(kind) is ChannelKind.SIONNA:
         from radioslam.sim.sionna_channel import SionnaChannel  # optional extra: imported when asked for
 
-        return SionnaChannel(scene, radio)
+        return SionnaChannel(scene, radio, cache=trace_cache)
     return BuiltinChannel(scene, radio)
 
 

@@ -74,16 +74,18 @@ class Simulator:
     window_cp: np.ndarray  # (B, 1 + R) their CP lengths
     pss_symbol: np.ndarray  # (n_sc,) the PSS on the active subcarriers
     channel_kind: ChannelKind = ChannelKind.BUILTIN  # where a scene's echo paths come from
+    trace_cache: object | None = None  # where the channel keeps its traces (make_channel), or None
 
     @classmethod
     def from_scene(cls, scene: Scene, mode: CaptureMode = CaptureMode.WAVEFORM,
-                   rows: np.ndarray | None = None, channel: ChannelKind = ChannelKind.BUILTIN) -> "Simulator":
-        return cls.from_radio(scene.radio, mode, scene, rows, channel)
+                   rows: np.ndarray | None = None, channel: ChannelKind = ChannelKind.BUILTIN,
+                   trace_cache=None) -> "Simulator":
+        return cls.from_radio(scene.radio, mode, scene, rows, channel, trace_cache)
 
     @classmethod
     def from_radio(cls, radio: RadioConfig, mode: CaptureMode = CaptureMode.WAVEFORM,
                    scene: Scene | None = None, rows: np.ndarray | None = None,
-                   channel: ChannelKind = ChannelKind.BUILTIN) -> "Simulator":
+                   channel: ChannelKind = ChannelKind.BUILTIN, trace_cache=None) -> "Simulator":
         num = Numerology.from_config(radio)
         schedule = FrameSchedule.from_config(radio)
         beams = BeamSet.from_config(radio)
@@ -98,13 +100,14 @@ class Simulator:
                      + np.ceil(longest_delay * num.sample_rate_hz) + WINDOW_GUARD_SAMPLES)
         pss = pss_grid(radio.pss, radio.n_id2, num.subcarrier_indices())
         return cls(scene, radio, mode, num, schedule, beams, rows, noise_variance(radio), window, symbols, cp, pss,
-                   ChannelKind(channel))
+                   ChannelKind(channel), trace_cache)
 
     @cached_property
     def channel(self) -> ChannelBackend | None:
         """The scene's channel backend, built when first asked for (a memory estimate needs none; Sionna's
         scene costs a second); None without a scene."""
-        return None if self.scene is None else make_channel(self.channel_kind, self.scene, self.radio)
+        return None if self.scene is None else make_channel(self.channel_kind, self.scene, self.radio,
+                                                            self.trace_cache)
 
     def memory(self) -> MemoryEstimate:
         """What simulating one pose needs, before anything is allocated (:mod:`radioslam.sim.memory`)."""

@@ -25,18 +25,28 @@ the rows fed alike, 1 in the horizontal plane, so a wall at the terminal's heigh
 ``synthetic_array`` (default) Sionna traces from each array's centre and applies the elements' phases
 as plane waves (exact in the far field, beyond 2D²/λ ≈ 0.26 m here); without it every element pair is
 traced (spherical wavefronts, 64× the paths).
+
+A trace is the costly part (seconds a pose): its arrays (each orientation's coefficients, delays, angles,
+interaction kinds, first bounces) can be kept in a :class:`TraceStore` under :meth:`SionnaChannel.trace_key`,
+which hashes what they depend on (the scene's mesh and materials, the Mitsuba file, the arrays' geometry,
+the carrier, the solver's options, the pose, Sionna's version). The codebook, element pattern and rows'
+factor are applied after it, so a change of those reuses the trace.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
 from radioslam.antenna.codebook import BeamSet
 from radioslam.config import RadioConfig
-from radioslam.scene.extrude import extruded_mesh
+from radioslam.scene.extrude import extruded_mesh, scene_mesh
 from radioslam.scene.mesh import Mesh
 from radioslam.scene.model import Scene
 from radioslam.sim.errors import SimulationError
@@ -45,6 +55,15 @@ from radioslam.sim.paths import EchoPaths, PathKind, leakage_path
 INSTALL_HINT = ("pip install 'radioslam[sionna]', and an LLVM for Dr.Jit's CPU backend (Debian: apt install "
                 "libllvm19; DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1)")
 DIFFUSE_FLAG = 2  # sionna.rt.constants.InteractionType.DIFFUSE
+TRACE_FORMAT = 1  # raised whenever the stored arrays change meaning
+
+
+class TraceStore(Protocol):
+    """Where traces are kept between runs (:class:`radioslam.io.trace_cache.TraceCache`)."""
+
+    def load(self, key: str) -> dict[str, np.ndarray] | None: ...
+
+    def store(self, key: str, arrays: dict[str, np.ndarray]) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -112,11 +131,14 @@ def check_scene(scene: Scene) -> Mesh | None:
 class SionnaChannel:
     """Echo paths of a scene's poses from Sionna RT (built once per scene)."""
 
-    def __init__(self, scene: Scene, radio: RadioConfig, options: SionnaOptions | None = None):
+    def __init__(self, scene: Scene, radio: RadioConfig, options: SionnaOptions | None = None,
+                 cache: TraceStore | None = None):
         self.rt, self.mi = import_sionna()
         options = options or SionnaOptions(samples=radio.sionna_samples)
-        self.radio, self.options, self.beams = radio, options, BeamSet.from_config(radio)
-        self.scene = self._sionna_scene(scene, check_scene(scene))
+        self.radio, self.options, self.beams, self.cache = radio, options, BeamSet.from_config(radio), cache
+        mesh = check_scene(scene)
+        self.scene_digest = scene_digest(scene, mesh)
+        self.scene = self._sionna_scene(scene, mesh)
         self.solver = self.rt.PathSolver()
 
     def _sionna_scene(self, scene: Scene, mesh: Mesh | None):
@@ -182,17 +204,46 @@ class SionnaChannel:
                            synthetic_array=o.synthetic_array, specular_reflection=True,
                            diffuse_reflection=o.diffuse, refraction=True, seed=o.seed)
 
+    def trace_key(self, pose: np.ndarray) -> str:
+        """What a trace of ``pose`` depends on, hashed (SHA-256, hex)."""
+        radio = self.radio
+        doc = {"format": TRACE_FORMAT, "sionna": self.rt.__version__, "scene": self.scene_digest,
+               "radio": [radio.carrier_hz, radio.array_elements, radio.height_m, radio.array_baseline_m,
+                         radio.orientations], "options": asdict(self.options),
+               "pose": [float(x) for x in np.asarray(pose, dtype=np.float64)]}
+        return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
+
+    def traced(self, pose: np.ndarray) -> dict[str, np.ndarray]:
+        """The arrays of a trace of ``pose``, each with the orientation first: ``coefficients``
+        (K, rx_ant, tx_ant, P), ``tau``, ``theta_t``, ``phi_t``, ``theta_r``, ``phi_r`` and ``diffuse``
+        (K, P), ``first`` (K, P, 2) the first bounce. From the cache when it holds them, else traced
+        (and stored)."""
+        key = None if self.cache is None else self.trace_key(pose)
+        arrays = None if key is None else self.cache.load(key)
+        if arrays is None:
+            arrays = self._trace_arrays(pose)
+            if key is not None:
+                self.cache.store(key, arrays)
+        return arrays
+
+    def _trace_arrays(self, pose: np.ndarray) -> dict[str, np.ndarray]:
+        traced = self.trace(pose)
+        k = np.arange(self.radio.orientations)  # orientation k's TX k to its RX k only
+        # baseband coefficients (rx, rx_ant, tx, tx_ant, paths), absolute delays
+        a = np.asarray(traced.cir(normalize_delays=False, out_type="numpy")[0])[..., 0]
+        arrays = {"coefficients": a[k, :, k].astype(np.complex64), "tau": np.asarray(traced.tau.numpy())[k, k]}
+        for name in ("theta_t", "phi_t", "theta_r", "phi_r"):
+            arrays[name] = np.asarray(getattr(traced, name).numpy())[k, k]
+        kinds = np.asarray(traced.interactions.numpy())  # (depth, rx, tx, paths) (synthetic)
+        arrays["diffuse"] = np.any((kinds[:, k, k] & DIFFUSE_FLAG) != 0, axis=0)
+        arrays["first"] = np.asarray(traced.vertices.numpy())[0, k, k][..., :2]  # (depth, rx, tx, paths, 3)
+        return arrays
+
     def paths(self, pose: np.ndarray, leakage: bool = True) -> EchoPaths:
         """Every echo path of the terminal at ``pose``, with its gain on every beam (``beam_gain``)."""
         pose = np.asarray(pose, dtype=np.float64)
-        traced = self.trace(pose)
-        # baseband coefficients (rx, rx_ant, tx, tx_ant, paths), absolute delays
-        a = np.asarray(traced.cir(normalize_delays=False, out_type="numpy")[0])[..., 0]
-        tau = np.asarray(traced.tau.numpy())
-        angles = [np.asarray(x.numpy()) for x in (traced.theta_t, traced.phi_t, traced.theta_r, traced.phi_r)]
-        kinds = np.asarray(traced.interactions.numpy())  # (depth, rx, tx, paths) (synthetic)
-        vertices = np.asarray(traced.vertices.numpy())  # (depth, rx, tx, paths, 3)
-        parts = [self._orientation_paths(pose, k, a[k, :, k], tau, angles, kinds, vertices)
+        arrays = self.traced(pose)
+        parts = [self._orientation_paths(pose, k, {name: x[k] for name, x in arrays.items()})
                  for k in range(self.radio.orientations)]
         if leakage and np.isfinite(self.radio.isolation_db):  # its gain is the arrays' coupling (beam_path_gains)
             parts.append((*leakage_path(self.radio), np.zeros((len(self.beams), 1), dtype=np.complex128),
@@ -202,23 +253,34 @@ class SionnaChannel:
                          np.concatenate(kind).astype(np.int8), np.concatenate(segment), np.concatenate(point),
                          beam_gain=np.concatenate(gains, axis=1))
 
-    def _orientation_paths(self, pose, k, coefficients, tau, angles, kinds, vertices):
-        """(delay, amplitude, angle, segment, point, beam gains, kind) of the paths traced for orientation k;
-        ``coefficients`` (rx_ant, tx_ant, paths)."""
-        theta_t, phi_t, theta_r, phi_r = (x[k, k] for x in angles)  # synthetic: (paths,)
-        delay = tau[k, k]
+    def _orientation_paths(self, pose, k, trace):
+        """(delay, amplitude, angle, segment, point, beam gains, kind) of the paths traced for orientation k
+        (``trace``: :meth:`traced`'s arrays of that orientation)."""
+        delay, coefficients = trace["tau"], trace["coefficients"]  # (P,), (rx_ant, tx_ant, P)
         valid = (delay > 0) & np.any(coefficients != 0, axis=(0, 1))
-        coefficients = np.moveaxis(coefficients[..., valid], -1, 0)  # (P, rx_ant, tx_ant)
+        coefficients = np.moveaxis(coefficients[..., valid], -1, 0).astype(np.complex128)  # (P, rx_ant, tx_ant)
         yaw = pose[2] + k * 2 * np.pi / self.radio.orientations
         q = self.radio.element_exponent
         factor = np.ones((len(self.beams), int(valid.sum())))
-        for theta, phi in ((theta_t[valid], phi_t[valid]), (theta_r[valid], phi_r[valid])):
+        for theta, phi in ((trace["theta_t"][valid], trace["phi_t"][valid]),
+                           (trace["theta_r"][valid], trace["phi_r"][valid])):
             elevation = np.pi / 2 - theta  # the rows' factor of each beam's elevation row j, then the element's
             factor *= self.beams.vertical_factor(elevation) * element_factor(phi - yaw, elevation, q)
         gains = beam_gains(self.beams, coefficients, k) * factor
-        first = vertices[0, k, k][valid]  # the first bounce: where the echo comes from
-        diffuse = np.any((kinds[:, k, k][:, valid] & DIFFUSE_FLAG) != 0, axis=0)
-        kind = np.where(diffuse, PathKind.DIFFUSE, PathKind.SPECULAR)
-        angle = np.angle(np.exp(1j * (phi_t[valid] - pose[2])))
+        kind = np.where(trace["diffuse"][valid], PathKind.DIFFUSE, PathKind.SPECULAR)
+        angle = np.angle(np.exp(1j * (trace["phi_t"][valid] - pose[2])))
         return (delay[valid].astype(np.float64), np.ones(len(kind), dtype=np.complex128), angle,
-                np.full(len(kind), -1), first[:, :2].astype(np.float64), gains, kind)
+                np.full(len(kind), -1), trace["first"][valid].astype(np.float64), gains, kind)
+
+
+def scene_digest(scene: Scene, mesh: Mesh | None) -> str:
+    """SHA-256 of what Sionna's scene is built from: the mesh (the extruded one, or the Mitsuba file's with
+    the file itself), every material's parameters."""
+    digest = hashlib.sha256()
+    if mesh is None:
+        digest.update(Path(scene.spec.mitsuba).read_bytes())
+        mesh = scene_mesh(scene)
+    for array in (mesh.vertices, mesh.faces, mesh.face_material):
+        digest.update(np.ascontiguousarray(array).tobytes())
+    digest.update(repr((scene.material_names, scene.materials, mesh.material_names)).encode())
+    return digest.hexdigest()
