@@ -38,6 +38,9 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Protocol
@@ -88,14 +91,30 @@ def import_sionna():
                 os.environ["DRJIT_LIBLLVM_PATH"] = candidate
                 break
     try:
-        import drjit  # noqa: F401  (its LLVM backend fails here when no LLVM is found)
-        import mitsuba as mi
-        import sionna.rt as rt
+        with _c_stderr_silenced():
+            import drjit  # noqa: F401  (its LLVM backend fails here when no LLVM is found)
+            import mitsuba as mi
+            import sionna.rt as rt
     except Exception as exc:  # ImportError, or Dr.Jit's own when no LLVM is found
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise SimulationError(f"the sionna channel needs Sionna RT: {INSTALL_HINT} ({reason})",
                               field="--channel") from None
     return rt, mi
+
+
+@contextmanager
+def _c_stderr_silenced() -> Iterator[None]:
+    """File descriptor 2 sent to /dev/null: Dr.Jit's search for an LLVM prints its failures from C there,
+    which would break the one-line error (its exception says the same)."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def beam_gains(beams: BeamSet, coefficients: np.ndarray, orientation: int) -> np.ndarray:
