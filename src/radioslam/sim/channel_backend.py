@@ -18,6 +18,14 @@ from radioslam.sim.errors import SimulationError
 from radioslam.sim.paths import EchoPaths, echo_paths
 
 
+class TraceStore(Protocol):
+    """Where a ray tracer's traces are kept between runs (:class:`radioslam.io.trace_cache.TraceCache`)."""
+
+    def load(self, key: str) -> dict[str, np.ndarray] | None: ...
+
+    def store(self, key: str, arrays: dict[str, np.ndarray]) -> None: ...
+
+
 class ChannelBackend(Protocol):
     def paths(self, pose: np.ndarray, leakage: bool = True) -> EchoPaths:
         """Every echo path of the terminal at ``pose`` (x, y, θ)."""
@@ -36,10 +44,10 @@ class BuiltinChannel:
 
 
 def make_channel(kind: ChannelKind, scene: Scene, radio: RadioConfig | None = None,
-                 trace_cache=None) -> ChannelBackend:
+                 trace_cache: TraceStore | None = None) -> ChannelBackend:
     """The backend of ``kind`` for ``scene`` (its own radio unless ``radio`` is given); Sionna RT is
     imported only here, and its absence is a one-line error saying how to install it. Sionna's traces
-    are kept in ``trace_cache`` (a :class:`~radioslam.sim.sionna_channel.TraceStore`) when one is given;
+    are kept in ``trace_cache`` (a :class:`TraceStore`) when one is given;
     the caster's are not (it traces a pose faster than an archive of its paths is read)."""
     radio = radio or scene.radio
     if ChannelKind(kind) is ChannelKind.SIONNA:

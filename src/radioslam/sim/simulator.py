@@ -22,7 +22,7 @@ from radioslam.nr.pss import pss_grid
 from radioslam.nr.qam import qam16_modulate, random_bits
 from radioslam.scene.model import Scene
 from radioslam.sim.channel import beam_path_gains, binned_channel_response
-from radioslam.sim.channel_backend import ChannelBackend, make_channel
+from radioslam.sim.channel_backend import ChannelBackend, TraceStore, make_channel
 from radioslam.sim.errors import SimulationError
 from radioslam.sim.impairments import receiver_chain, transmitter_chain
 from radioslam.sim.memory import MemoryEstimate, pose_memory
@@ -74,18 +74,19 @@ class Simulator:
     window_cp: np.ndarray  # (B, 1 + R) their CP lengths
     pss_symbol: np.ndarray  # (n_sc,) the PSS on the active subcarriers
     channel_kind: ChannelKind = ChannelKind.BUILTIN  # where a scene's echo paths come from
-    trace_cache: object | None = None  # where the channel keeps its traces (make_channel), or None
+    trace_cache: TraceStore | None = None  # where the channel keeps its traces (make_channel), or None
 
     @classmethod
     def from_scene(cls, scene: Scene, mode: CaptureMode = CaptureMode.WAVEFORM,
                    rows: np.ndarray | None = None, channel: ChannelKind = ChannelKind.BUILTIN,
-                   trace_cache=None) -> "Simulator":
+                   trace_cache: TraceStore | None = None) -> "Simulator":
         return cls.from_radio(scene.radio, mode, scene, rows, channel, trace_cache)
 
     @classmethod
     def from_radio(cls, radio: RadioConfig, mode: CaptureMode = CaptureMode.WAVEFORM,
                    scene: Scene | None = None, rows: np.ndarray | None = None,
-                   channel: ChannelKind = ChannelKind.BUILTIN, trace_cache=None) -> "Simulator":
+                   channel: ChannelKind = ChannelKind.BUILTIN,
+                   trace_cache: TraceStore | None = None) -> "Simulator":
         num = Numerology.from_config(radio)
         schedule = FrameSchedule.from_config(radio)
         beams = BeamSet.from_config(radio)

@@ -42,8 +42,8 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass
+from functools import cached_property
 from pathlib import Path
-from typing import Protocol
 
 import numpy as np
 
@@ -52,6 +52,7 @@ from radioslam.config import RadioConfig
 from radioslam.scene.extrude import extruded_mesh, scene_mesh
 from radioslam.scene.mesh import Mesh
 from radioslam.scene.model import Scene
+from radioslam.sim.channel_backend import TraceStore
 from radioslam.sim.errors import SimulationError
 from radioslam.sim.paths import EchoPaths, PathKind, leakage_path
 
@@ -59,14 +60,6 @@ INSTALL_HINT = ("pip install 'radioslam[sionna]', and an LLVM for Dr.Jit's CPU b
                 "libllvm19; DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1)")
 DIFFUSE_FLAG = 2  # sionna.rt.constants.InteractionType.DIFFUSE
 TRACE_FORMAT = 1  # raised whenever the stored arrays change meaning
-
-
-class TraceStore(Protocol):
-    """Where traces are kept between runs (:class:`radioslam.io.trace_cache.TraceCache`)."""
-
-    def load(self, key: str) -> dict[str, np.ndarray] | None: ...
-
-    def store(self, key: str, arrays: dict[str, np.ndarray]) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -155,10 +148,15 @@ class SionnaChannel:
         self.rt, self.mi = import_sionna()
         options = options or SionnaOptions(samples=radio.sionna_samples)
         self.radio, self.options, self.beams, self.cache = radio, options, BeamSet.from_config(radio), cache
-        mesh = check_scene(scene)
-        self.scene_digest = scene_digest(scene, mesh)
-        self.scene = self._sionna_scene(scene, mesh)
+        self.source, self.source_mesh = scene, check_scene(scene)
+        self.scene = self._sionna_scene(scene, self.source_mesh)
         self.solver = self.rt.PathSolver()
+
+    @cached_property
+    def scene_digest(self) -> str:
+        """:func:`scene_digest` of the scene, when a trace key is first asked for (a Mitsuba scene's files
+        are read again for it)."""
+        return scene_digest(self.source, self.source_mesh)
 
     def _sionna_scene(self, scene: Scene, mesh: Mesh | None):
         rt, radio = self.rt, self.radio
@@ -277,7 +275,7 @@ class SionnaChannel:
         (``trace``: :meth:`traced`'s arrays of that orientation)."""
         delay, coefficients = trace["tau"], trace["coefficients"]  # (P,), (rx_ant, tx_ant, P)
         valid = (delay > 0) & np.any(coefficients != 0, axis=(0, 1))
-        coefficients = np.moveaxis(coefficients[..., valid], -1, 0).astype(np.complex128)  # (P, rx_ant, tx_ant)
+        coefficients = np.moveaxis(coefficients[..., valid], -1, 0)  # (P, rx_ant, tx_ant)
         yaw = pose[2] + k * 2 * np.pi / self.radio.orientations
         q = self.radio.element_exponent
         factor = np.ones((len(self.beams), int(valid.sum())))
