@@ -4,7 +4,7 @@ the 2.5D caster's calibration and geometry, heights estimated between the rows, 
 import numpy as np
 import pytest
 
-from radioslam.antenna.codebook import BeamSet
+from radioslam.antenna.codebook import ANY_ROW, BeamSet
 from radioslam.config import RadioConfig
 from radioslam.eval.map3d import height_error_summary, match_surfaces
 from radioslam.io.ply import read_map_points, read_scan, write_scan
@@ -55,39 +55,74 @@ def test_flat_rows_are_the_flat_scan():
                                rtol=1e-12, atol=1e-15)
 
 
-def test_fan_keeps_the_flat_casters_calibration_and_geometry():
-    """An unbounded wall returns on the horizontal row the power the 2D caster gives (the fan's normalization
-    W), within 1.5 dB (the slant ranges and the coarser fan); every echo's delay is the TX→point→RX path;
-    an extruded floor's and ceiling's echoes lie on them (height ± Δz from the slant range and elevation)."""
-    flat = scene_from_mapping({**BOX, "radio": {"isolation_db": 400}})
-    raised = scene_from_mapping({**BOX, "radio": {"isolation_db": 400, "elevation_beams": 3}})
-    pose = flat.poses[0]
-    flat_paths, fan_paths = echo_paths(flat, pose), echo_paths(raised, pose)
-    flat_power = np.sum(np.abs(beam_path_gains(BeamSet.from_config(flat.radio), flat_paths)) ** 2, axis=1)
-    beams = BeamSet.from_config(raised.radio)
-    diffuse = fan_paths.kind == PathKind.DIFFUSE
-    fan_gain = beam_path_gains(beams, fan_paths)
-    specular = np.abs(beam_path_gains(BeamSet.from_config(flat.radio), flat_paths)[:, flat_paths.kind == 1]) ** 2
-    fan_power = np.sum(np.abs(fan_gain[beams.elevation_index == 0]) ** 2, axis=1)
-    level = 10 * np.log10(fan_power / flat_power)
-    dominated = specular.sum(axis=1) < 0.1 * flat_power  # beams the diffuse echoes dominate
-    assert dominated.sum() > 40 and np.median(np.abs(level[dominated])) < 1.5
-    # geometry: delay of the slant path from its point (x, y) and elevation
-    r = np.linalg.norm(fan_paths.point[diffuse] - pose[:2], axis=1)
-    dz = r * np.tan(fan_paths.elevation[diffuse])
-    np.testing.assert_allclose(fan_paths.delay_s[diffuse], bistatic_slant_delay(r, dz, 0.05), rtol=1e-12)
-    room = scene_from_mapping({**BOX, "radio": {"elevation_beams": 3},
+def test_horizontal_row_is_the_flat_scans_channel():
+    """Walls from the floor up, of no height or twice the arrays': the 2.5D channel's horizontal row is the
+    flat caster's channel, its diffuse paths the flat rays in delay (1 µm) and phase (1 mrad) and within
+    0.2 dB in power (the 3D lobe), and its response H on every horizontal beam within 0.2 dB, correlated
+    ≥ 0.999."""
+    from radioslam.nr.numerology import Numerology
+    from radioslam.sim.channel import channel_response
+
+    for extrude in (None, {"height_m": 3.0}):
+        flat = scene_from_mapping({**BOX, "radio": {"isolation_db": 400}, **({"extrude": extrude} if extrude else {})})
+        raised = scene_from_mapping({**BOX, "radio": {"isolation_db": 400, "elevation_beams": 5},
+                                     **({"extrude": extrude} if extrude else {})})
+        pose = flat.poses[0]
+        flat_paths, fan_paths = echo_paths(flat, pose), echo_paths(raised, pose)
+        level = fan_paths.row == 0
+        assert level.sum() == np.sum(flat_paths.kind == PathKind.DIFFUSE)
+        diffuse = flat_paths.kind == PathKind.DIFFUSE
+        np.testing.assert_allclose(fan_paths.delay_s[level] * C, flat_paths.delay_s[diffuse] * C, atol=1e-6)  # 1 µm
+        ratio = fan_paths.amplitude[level] / flat_paths.amplitude[diffuse]
+        assert np.all(np.abs(20 * np.log10(np.abs(ratio))) < 0.2) and np.allclose(np.angle(ratio), 0.0, atol=1e-3)
+        beams_flat, beams = BeamSet.from_config(flat.radio), BeamSet.from_config(raised.radio)
+        p = Numerology.from_config(flat.radio).subcarrier_indices()
+        h_flat = channel_response(beam_path_gains(beams_flat, flat_paths), flat_paths.delay_s, p, 120e3)
+        h_fan = channel_response(beam_path_gains(beams, fan_paths)[beams.elevation_index == 0], fan_paths.delay_s,
+                                 p, 120e3)
+        power = 10 * np.log10(np.sum(np.abs(h_fan) ** 2, axis=1) / np.sum(np.abs(h_flat) ** 2, axis=1))
+        corr = np.abs(np.sum(h_fan * h_flat.conj(), axis=1)) / np.linalg.norm(h_fan, axis=1) / np.linalg.norm(h_flat, axis=1)
+        assert np.max(np.abs(power)) < 0.2 and corr.min() > 0.999
+
+
+def test_wall_columns_follow_the_rows_and_the_walls_height():
+    """A wall column's path on row j lies on the wall (its delay the slant path to its point at the
+    centroid ε_j), within the wall's height, its power the row's integral: converged in the quadrature,
+    and raised rows see less of a low wall. The floor's and ceiling's echoes lie on them."""
+    import radioslam.sim.elevated as elevated
+
+    room = scene_from_mapping({**BOX, "radio": {"elevation_beams": 5},
                                "extrude": {"height_m": 2.6, "floor": "concrete", "ceiling": "concrete"}})
+    pose = room.poses[0]
     paths = echo_paths(room, pose)
+    walls = (paths.kind == PathKind.DIFFUSE) & (paths.segment >= 0)
+    r = np.linalg.norm(paths.point[walls] - pose[:2], axis=1)
+    dz = r * np.tan(paths.elevation[walls])
+    np.testing.assert_allclose(paths.delay_s[walls], bistatic_slant_delay(r, dz, 0.05), rtol=1e-12)
+    assert np.all((1.5 + dz >= 0.0) & (1.5 + dz <= 2.6))  # the walls stop at the floor and the ceiling
+    assert set(paths.row[walls]) == {-8, -4, 0, 4, 8} and np.all(paths.row[~walls] == ANY_ROW)
     for code, height in ((FLOOR_SEGMENT, 0.0), (CEILING_SEGMENT, 2.6)):
         on = paths.segment == code
         slant = C * paths.delay_s[on] / 2  # ≈ the slant range (b = 5 cm)
         assert on.sum() > 100
         np.testing.assert_allclose(1.5 + slant * np.sin(paths.elevation[on]), height, atol=2e-3)
-    walls = (paths.kind == PathKind.DIFFUSE) & (paths.segment >= 0)
-    r = np.linalg.norm(paths.point[walls] - pose[:2], axis=1)
-    z = 1.5 + r * np.tan(paths.elevation[walls])
-    assert z.min() >= 0.0 and z.max() <= 2.6  # the walls stop at the floor and the ceiling
+    # the quadrature: a step 4× finer moves no row's power by more than 0.01 dB
+    coarse = elevated.wall_column_paths(room, pose, room.radio)
+    step, elevated.WALL_STEP_DEG = elevated.WALL_STEP_DEG, elevated.WALL_STEP_DEG / 4
+    try:
+        fine = elevated.wall_column_paths(room, pose, room.radio)
+    finally:
+        elevated.WALL_STEP_DEG = step
+    np.testing.assert_allclose(20 * np.log10(np.abs(fine[1] / coarse[1])), 0.0, atol=0.01)
+    # the arrays 0.3 m above the floor: the rows below see little wall (the lowest 21 dB less than the
+    # highest); halfway up, rows ±j see alike
+    for height, lowest_db in ((0.3, -15.0), (1.5, 0.0)):
+        scene = scene_from_mapping({**BOX, "radio": {"elevation_beams": 5, "height_m": height},
+                                    "extrude": {"height_m": 3.0}})
+        _, amp, _, _, _, _, row = elevated.wall_column_paths(scene, pose, scene.radio)
+        power = {j: np.sum(np.abs(amp[row == j]) ** 2) for j in (-8, 8)}
+        level = 10 * np.log10(power[-8] / power[8])
+        assert level < lowest_db if lowest_db < 0 else abs(level) < 0.01
 
 
 @pytest.mark.parametrize("elevation_deg", [-11.0, -3.0, 0.0, 6.0, 13.0])
@@ -151,3 +186,27 @@ def test_height_errors_against_a_box():
     assert not match.horizontal[3] and match.distance_m[3] == pytest.approx(0.2, abs=0.04)
     summary = height_error_summary(match)
     assert summary["points"] == 3 and set(summary["by_surface_height_m"]) == {"0.75", "2.8"}
+
+
+@pytest.mark.parametrize("elevations_deg", [(-60.0,), (-58.0, 58.0), (75.0,)])
+def test_echoes_outside_the_rows_make_no_point(elevations_deg):
+    """Echoes from outside the rows' span (±14.5° of 5 rows): a floor alone, or a floor and a ceiling at one
+    slant range (the arrays halfway up), 40 dB above the noise on the rows' sidelobes. The beam-space fit
+    over every elevation puts them outside each row's window, so no row makes a point of them; the same
+    echoes within the span do (:func:`test_height_between_the_rows`). (Within about 35° beyond the span the
+    rows' sidelobe magnitudes can look like a main lobe's: the 8 rows' pattern repeats its shape there.)"""
+    radio = RadioConfig(elevation_beams=5, snr_db=30.0, isolation_db=400.0)
+    beams = Simulator.from_radio(radio).beams
+    sim = Simulator.from_radio(radio, rows=np.flatnonzero((beams.orientation == 0) & (beams.index == 0)))
+    eps = np.radians(np.array(elevations_deg))
+    slant = 1.8
+    delay = bistatic_slant_delay(slant * np.cos(eps), slant * np.sin(eps), radio.array_baseline_m)
+    sidelobe = np.max(beams.vertical_gain(eps))  # the strongest row's two-way vertical factor there
+    amplitude = np.sqrt(noise_variance(radio) * 10 ** 4) / 8.0 / sidelobe
+    rng = np.random.default_rng(5)
+    paths = EchoPaths(delay, amplitude * np.exp(2j * np.pi * rng.random(len(eps))), np.zeros(len(eps)),
+                      np.full(len(eps), PathKind.SPECULAR, np.int8), np.full(len(eps), -1),
+                      np.column_stack([slant * np.cos(eps), np.zeros(len(eps))]), elevation=eps)
+    result = Receiver(radio, radio.hardware_delay_s).sense(sim.capture_from_paths(paths, rng))
+    assert np.any(result.valid)  # detected on the rows ...
+    assert len(result.scan) == 0  # ... but not a point

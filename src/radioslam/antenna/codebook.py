@@ -30,6 +30,9 @@ import numpy as np
 from radioslam.antenna.array import array_response, stacked_coupling, steering_vector
 from radioslam.config import Impairments, LeakageCoupling, RadioConfig
 
+# a path's row (:meth:`BeamSet.two_way_gain`) when it reaches every elevation row through its vertical gain
+ANY_ROW = np.iinfo(np.int32).min
+
 
 def dft_codebook(n_elements: int, bits: int, indices: np.ndarray) -> np.ndarray:
     """Weights w_i = a(i/2^M)/√N, shape (len(indices), N)."""
@@ -172,9 +175,12 @@ class BeamSet:
             actual = np.einsum("bm,mn,bn->b", w * rx, c, w * tx)
         return actual / np.sqrt(np.mean(np.abs(ideal) ** 2))
 
-    def two_way_gain(self, theta_terminal: np.ndarray, elevation: np.ndarray | None = None) -> np.ndarray:
+    def two_way_gain(self, theta_terminal: np.ndarray, elevation: np.ndarray | None = None,
+                     path_rows: np.ndarray | None = None) -> np.ndarray:
         """Amplitude gain (B, P) of every beam towards paths at terminal-frame azimuths (P,) and
-        elevations (P,) (None: horizontal).
+        elevations (P,) (None: horizontal). A path with a ``path_rows`` entry j other than ``ANY_ROW`` has its
+        vertical pattern in its amplitude already (a wall column integrated over row j's elevations,
+        :mod:`radioslam.sim.elevated`): it reaches the beams of row j only, with their horizontal gain.
 
         ϖ_{ij} of the module docstring (ϖ_i(θ − k·π/2) for the flat scan), the element pattern
         cos^q each way; zero behind the array. Per orientation only the paths in front of its
@@ -197,5 +203,9 @@ class BeamSet:
                     np.abs(array_response(w[rows] * rx.conj(), vartheta))
             out[np.ix_(rows, front)] = gain * (cos_el[front] * np.cos(local[front])) ** self.element_exponent
         if elevation is not None or len(self.elevation_indices) > 1:  # horizontal paths: the rows' factor at ε = 0
-            out *= self.vertical_gain(np.zeros_like(theta) if elevation is None else elevation)
+            vertical = self.vertical_gain(np.zeros_like(theta) if elevation is None else elevation)
+            if path_rows is not None:
+                own = np.flatnonzero(np.asarray(path_rows) != ANY_ROW)
+                vertical[:, own] = self.elevation_index[:, None] == np.asarray(path_rows)[own][None, :]
+            out *= vertical
         return out

@@ -28,7 +28,7 @@ def beam_path_gains(beams: BeamSet, paths: EchoPaths) -> np.ndarray:
     leak = paths.kind == PathKind.LEAKAGE
     # the leakage's angle is NaN: its column is overwritten below
     elevation = None if paths.elevation is None else np.where(leak, 0.0, paths.elevation)
-    gain = (beams.two_way_gain(np.where(leak, 0.0, paths.angle), elevation) if paths.beam_gain is None
+    gain = (beams.two_way_gain(np.where(leak, 0.0, paths.angle), elevation, paths.row) if paths.beam_gain is None
             else paths.beam_gain.astype(np.complex128)) * paths.amplitude
     gain[:, leak] = beams.coupling()[:, None] * paths.amplitude[leak]
     return gain

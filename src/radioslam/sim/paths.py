@@ -20,11 +20,12 @@ Gains (complex amplitudes relative to the transmitted signal, before beam gain):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import IntEnum
 
 import numpy as np
 
+from radioslam.antenna.codebook import ANY_ROW
 from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
 from radioslam.scene.model import Scene
 from radioslam.scene.raycast import cast_rays
@@ -54,6 +55,9 @@ class EchoPaths:
     # (P,) terminal-frame elevation of each path where a channel traces in 3D (NaN for leakage); None: all
     # horizontal, the 2D caster's flat paths
     elevation: np.ndarray | None = None
+    # (P,) the one elevation row j a path reaches, its vertical pattern already in its amplitude (ANY_ROW:
+    # every row, through the vertical gain); None: every path reaches every row
+    row: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.delay_s)
@@ -64,7 +68,8 @@ class EchoPaths:
         return EchoPaths(self.delay_s[order], self.amplitude[order], self.angle[order], self.kind[order],
                          self.segment[order], self.point[order],
                          None if self.beam_gain is None else self.beam_gain[:, order],
-                         None if self.elevation is None else self.elevation[order])
+                         None if self.elevation is None else self.elevation[order],
+                         None if self.row is None else self.row[order])
 
 
 def _echo(r, gain_wo_range, radio: RadioConfig):
@@ -131,14 +136,18 @@ def echo_paths(scene: Scene, pose: np.ndarray, radio: RadioConfig | None = None,
         specular_paths(scene, pose, radio)
     elevated = radio.elevation_beams > 1  # elevation beams: the 2.5D fan (:mod:`radioslam.sim.elevated`)
     diffuse = elevated_diffuse_paths(scene, pose, radio) if elevated else diffuse_paths(scene, pose, radio)
-    elevations = [diffuse[5], np.zeros(len(specular[0]))] if elevated else []
     parts = [diffuse[:5], specular]
     kinds = [np.full(len(p[0]), k) for p, k in zip(parts, (PathKind.DIFFUSE, PathKind.SPECULAR))]
     if leakage and np.isfinite(radio.isolation_db):
         parts.append(leakage_path(radio))
         kinds.append(np.array([PathKind.LEAKAGE]))
-        elevations += [np.full(1, np.nan)] if elevated else []
-    return _joined(parts, kinds, np.concatenate(elevations) if elevated else None)
+    paths = _joined(parts, kinds)
+    if not elevated:
+        return paths
+    others = len(paths) - len(diffuse[0])  # the horizontal speculars (and the leakage, its elevation NaN)
+    elevation = np.concatenate([diffuse[5], np.where(paths.kind[len(diffuse[0]):] == PathKind.LEAKAGE, np.nan, 0.0)])
+    row = np.concatenate([diffuse[6], np.full(others, ANY_ROW, dtype=np.int64)])
+    return replace(paths, elevation=elevation, row=row)
 
 
 def leakage_path(radio: RadioConfig):
@@ -148,10 +157,9 @@ def leakage_path(radio: RadioConfig):
             np.array([-1]), np.full((1, 2), np.nan))
 
 
-def _joined(parts, kinds, elevation: np.ndarray | None = None) -> EchoPaths:
+def _joined(parts, kinds) -> EchoPaths:
     tau, amp, ang, seg, pt = (np.concatenate(x) for x in zip(*parts))
-    return EchoPaths(tau, amp.astype(np.complex128), ang, np.concatenate(kinds).astype(np.int8), seg, pt,
-                     elevation=elevation)
+    return EchoPaths(tau, amp.astype(np.complex128), ang, np.concatenate(kinds).astype(np.int8), seg, pt)
 
 
 def leakage_paths(radio: RadioConfig) -> EchoPaths:
