@@ -25,7 +25,7 @@ def _peak(work) -> int:
         tracemalloc.stop()
 
 
-@pytest.mark.parametrize("radio", [{}, {"frames": 4}, {"ray_spacing_deg": 0.1}])
+@pytest.mark.parametrize("radio", [{}, {"frames": 4}, {"ray_spacing_deg": 0.1}, {"elevation_beams": 3}])
 def test_simulating_a_pose_stays_within_its_estimate(radio):
     scene = load_scene("paper-cnv").with_radio(**radio)
     sim = Simulator.from_scene(scene)

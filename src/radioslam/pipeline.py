@@ -81,7 +81,7 @@ def simulate_stage(scene_name: str, out: Path, seed: int, snr_db: float | None, 
     ``resume``, an unfinished run of the same scene, seed and settings there is gone on with."""
     scene = load_scene(scene_name).with_radio(snr_db=snr_db)
     # what one pose needs, and the calibration's empty sweep (every beam too), before anything is written
-    check_budget(Simulator.from_scene(scene).memory(), max_memory or default_budget(), scene_name)
+    check_budget(Simulator.from_scene(scene, channel=channel).memory(), max_memory or default_budget(), scene_name)
     check_channel(channel, scene, scene_name)
     run, manifest = RunDir(out), RunManifest(out)
     manifest.new_run(seed, scene_name, force, resume)

@@ -7,9 +7,17 @@ The estimate counts the largest arrays, each with the number of copies that is a
 - the capture's samples, complex64, beams × window: 3 copies while synthesizing (peak 2.0–2.4× on
   paper-cnv and on longer windows), 4 while sensing a recording (the file read, then the
   receiver's peak below 2×);
-- the echo paths' beam gains, complex128, (rays × hits) × beams, twice (gains and their sorted copy);
+- the echo paths' beam gains, complex128, paths × beams, twice (the gains and their product with the
+  amplitudes); the paths of the channel backend (:func:`expected_paths`): the flat caster's rays × hits;
+  the 2.5D caster's (elevation rows) rays × hits × rows and the floor's and ceiling's fan; Sionna RT's
+  ``SIONNA_PATHS_PER_SAMPLE`` per diffuse sample and orientation;
 - the ray caster's (rays × segments) float64 tables, about 10 alive at once, in blocks of at most
-  ``TABLE_CELLS`` cells (:mod:`radioslam.scene.raycast`).
+  ``TABLE_CELLS`` cells (:mod:`radioslam.scene.raycast`), and the 2.5D caster's (rays × hits) × elevation
+  quadrature tables (:mod:`radioslam.sim.elevated`);
+- Sionna RT's own trace (Dr.Jit's buffers, outside Python's allocator): ``SIONNA_TRACE_BASE`` plus
+  ``SIONNA_BYTES_PER_SAMPLE`` per diffuse sample, measured as resident memory on sionna-rt 2.2's CPU
+  backend (paper-cnv extruded, a concrete floor and ceiling, 5·10⁴ – 8·10⁵ samples: 0.77 – 5.9 GB a trace,
+  0.32 paths per sample and orientation; docs/notes.md, session 26).
 
 Poses are simulated one at a time, so a walk needs what one pose needs.
 """
@@ -20,6 +28,7 @@ import math
 import os
 from dataclasses import dataclass
 
+from radioslam.choices import ChannelKind
 from radioslam.scene.raycast import TABLE_CELLS
 from radioslam.sim.errors import SimulationError
 
@@ -27,6 +36,11 @@ SAMPLE_COPIES_SIMULATE = 3
 SAMPLE_COPIES_SENSE = 4
 GAIN_COPIES = 2
 RAY_TABLES = 10
+QUADRATURE_TABLES = 8  # the 2.5D caster's (columns × cells) float64 tables alive at once
+QUADRATURE_CELLS = 720  # its elevation quadrature: 180° / WALL_STEP_DEG
+SIONNA_TRACE_BASE = 500 * 2**20
+SIONNA_BYTES_PER_SAMPLE = 8 * 2**10
+SIONNA_PATHS_PER_SAMPLE = 0.4  # per orientation: 0.32 measured in a closed room (floor and ceiling)
 
 
 @dataclass(frozen=True)
@@ -58,17 +72,40 @@ def default_budget() -> int:
     return machine_memory() // 2 or 2 * 2**30
 
 
-def pose_memory(beams: int, window_samples: int, radio, segments: int, sensing: bool = False) -> MemoryEstimate:
-    """One pose's simulation (or, ``sensing``, the sensing of its recording) in bytes."""
+def expected_paths(radio, channel: ChannelKind = ChannelKind.BUILTIN, planes: int = 0) -> tuple[int, str]:
+    """How many echo paths one pose gives (at most, or for Sionna as measured in a closed room), and the
+    field that drives it; ``planes`` is the number of an extrusion's floor and ceiling (0 … 2)."""
+    if ChannelKind(channel) is ChannelKind.SIONNA:
+        return (math.ceil(SIONNA_PATHS_PER_SAMPLE * radio.sionna_samples * radio.orientations),
+                "radio.sionna_samples")
+    columns = math.ceil(360.0 / radio.ray_spacing_deg) * radio.max_hits
+    if radio.elevation_beams == 1:
+        return columns, "radio.ray_spacing_deg"
+    fan = math.ceil(360.0 / radio.ray_spacing_3d_deg) * math.ceil(90.0 / radio.ray_spacing_3d_deg)
+    return columns * radio.elevation_beams + planes * fan, "radio.ray_spacing_deg × radio.elevation_beams"
+
+
+def pose_memory(beams: int, window_samples: int, radio, segments: int, sensing: bool = False,
+                channel: ChannelKind = ChannelKind.BUILTIN, planes: int = 0) -> MemoryEstimate:
+    """One pose's simulation (or, ``sensing``, the sensing of its recording) in bytes, its paths from the
+    backend ``channel`` (and an extrusion's ``planes``)."""
     samples = beams * window_samples * 8
     if sensing:
         return MemoryEstimate({"samples": (SAMPLE_COPIES_SENSE * samples, "radio.fft_size × symbols × beams")})
     rays = math.ceil(360.0 / radio.ray_spacing_deg)
-    return MemoryEstimate({
+    paths, paths_field = expected_paths(radio, channel, planes)
+    parts = {
         "samples": (SAMPLE_COPIES_SIMULATE * samples, "radio.fft_size × symbols × beams"),
-        "path gains": (GAIN_COPIES * rays * radio.max_hits * beams * 16, "radio.ray_spacing_deg"),
+        "path gains": (GAIN_COPIES * paths * beams * 16, paths_field),
         "ray tables": (RAY_TABLES * min(rays * max(segments, 1), TABLE_CELLS) * 8, "walls × radio.ray_spacing_deg"),
-    })
+    }
+    if ChannelKind(channel) is ChannelKind.SIONNA:
+        parts["ray tracer"] = (SIONNA_TRACE_BASE + SIONNA_BYTES_PER_SAMPLE * radio.sionna_samples,
+                               "radio.sionna_samples")
+    elif radio.elevation_beams > 1:
+        parts["elevation quadrature"] = (QUADRATURE_TABLES * rays * radio.max_hits * QUADRATURE_CELLS * 8,
+                                         "radio.ray_spacing_deg")
+    return MemoryEstimate(parts)
 
 
 def recording_memory(data_bytes: int) -> MemoryEstimate:

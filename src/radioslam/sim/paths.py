@@ -63,7 +63,10 @@ class EchoPaths:
         return len(self.delay_s)
 
     def by_delay(self) -> "EchoPaths":
-        """The same paths, shortest delay first (ties keep their order)."""
+        """The same paths, shortest delay first (ties keep their order); these when they are so already (a
+        backend's beam gains are the largest array of a pose: not copied needlessly)."""
+        if np.all(np.diff(self.delay_s) >= 0):
+            return self
         order = np.argsort(self.delay_s, kind="stable")
         return EchoPaths(self.delay_s[order], self.amplitude[order], self.angle[order], self.kind[order],
                          self.segment[order], self.point[order],

@@ -112,8 +112,11 @@ class Simulator:
 
     def memory(self) -> MemoryEstimate:
         """What simulating one pose needs, before anything is allocated (:mod:`radioslam.sim.memory`)."""
+        extrude = None if self.scene is None else self.scene.spec.extrude
+        planes = 0 if extrude is None else (extrude.floor is not None) + (extrude.ceiling is not None)
         return pose_memory(len(self.rows), self.window_length, self.radio,
-                           0 if self.scene is None else len(self.scene.segments))
+                           0 if self.scene is None else len(self.scene.segments), channel=self.channel_kind,
+                           planes=planes)
 
     def timing_offset(self) -> int:
         """Grid mode's FFT window timing: ⌊T_H·f_s⌋ samples after each useful part starts."""

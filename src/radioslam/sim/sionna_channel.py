@@ -111,13 +111,11 @@ def _c_stderr_silenced() -> Iterator[None]:
 
 
 def beam_gains(beams: BeamSet, coefficients: np.ndarray, orientation: int) -> np.ndarray:
-    """g (B, P) of paths whose baseband coefficients (P, N_rx, N_tx) were traced with the arrays of
-    ``orientation``: w̃^H A w̃^* on that orientation's beams, 0 on the others."""
+    """g (B_k, P) on the beams of ``orientation`` (in beam order) of paths whose baseband coefficients
+    (P, N_rx, N_tx) were traced with that orientation's arrays: w̃^H A w̃^*, complex64."""
     w = beams.weights()[:, ::-1]  # our element n at −n·d: Sionna's element N − 1 − n
-    gains = np.zeros((len(beams), coefficients.shape[0]), dtype=np.complex128)
-    rows = np.flatnonzero(beams.orientation == orientation)
-    gains[rows] = np.einsum("bm,pmn,bn->bp", w[rows].conj(), coefficients, w[rows].conj())
-    return gains
+    weights = w[beams.orientation == orientation].conj().astype(np.complex64)
+    return np.einsum("bm,pmn,bn->bp", weights, coefficients.astype(np.complex64, copy=False), weights)
 
 
 def element_factor(azimuth: np.ndarray, elevation: np.ndarray, exponent: float) -> np.ndarray:
@@ -257,37 +255,48 @@ class SionnaChannel:
         return arrays
 
     def paths(self, pose: np.ndarray, leakage: bool = True) -> EchoPaths:
-        """Every echo path of the terminal at ``pose``, with its gain on every beam (``beam_gain``)."""
+        """Every echo path of the terminal at ``pose``, shortest delay first, with its gain on every beam
+        (``beam_gain``, complex64 as Sionna's coefficients: beams × paths is the largest array of a pose)."""
         pose = np.asarray(pose, dtype=np.float64)
         arrays = self.traced(pose)
         parts = [self._orientation_paths(pose, k, {name: x[k] for name, x in arrays.items()})
                  for k in range(self.radio.orientations)]
         if leakage and np.isfinite(self.radio.isolation_db):  # its gain is the arrays' coupling (beam_path_gains)
-            parts.append((*leakage_path(self.radio), np.zeros((len(self.beams), 1), dtype=np.complex128),
-                          np.array([PathKind.LEAKAGE])))
-        delay, amplitude, angle, segment, point, gains, kind = zip(*parts)
-        return EchoPaths(np.concatenate(delay), np.concatenate(amplitude).astype(np.complex128), np.concatenate(angle),
-                         np.concatenate(kind).astype(np.int8), np.concatenate(segment), np.concatenate(point),
-                         beam_gain=np.concatenate(gains, axis=1))
+            parts.append((*leakage_path(self.radio), np.array([PathKind.LEAKAGE]), None))
+        delay, amplitude, angle, segment, point, kind = (np.concatenate(x) for x in zip(*(p[:6] for p in parts)))
+        order = np.argsort(delay, kind="stable")
+        slot = np.empty(len(delay), dtype=np.int64)  # where each path goes in delay order
+        slot[order] = np.arange(len(delay))
+        gains = np.zeros((len(self.beams), len(delay)), dtype=np.complex64)
+        start = 0
+        for part in parts:
+            count = len(part[0])
+            if part[6] is not None:  # this orientation's beams only; 0 on the others
+                rows, block = part[6]
+                gains[np.ix_(rows, slot[start:start + count])] = block
+            start += count
+        return EchoPaths(delay[order], amplitude[order].astype(np.complex128), angle[order],
+                         kind[order].astype(np.int8), segment[order], point[order], beam_gain=gains)
 
     def _orientation_paths(self, pose, k, trace):
-        """(delay, amplitude, angle, segment, point, beam gains, kind) of the paths traced for orientation k
-        (``trace``: :meth:`traced`'s arrays of that orientation)."""
+        """(delay, amplitude, angle, segment, point, kind, (rows, gains)) of the paths traced for orientation
+        k (``trace``: :meth:`traced`'s arrays of that orientation), the gains on that orientation's beams."""
         delay, coefficients = trace["tau"], trace["coefficients"]  # (P,), (rx_ant, tx_ant, P)
         valid = (delay > 0) & np.any(coefficients != 0, axis=(0, 1))
         coefficients = np.moveaxis(coefficients[..., valid], -1, 0)  # (P, rx_ant, tx_ant)
         yaw = pose[2] + k * 2 * np.pi / self.radio.orientations
         q = self.radio.element_exponent
-        factor = np.ones((len(self.beams), int(valid.sum())))
+        rows = np.flatnonzero(self.beams.orientation == k)
+        factor = np.ones((len(rows), int(valid.sum())), dtype=np.float32)
         for theta, phi in ((trace["theta_t"][valid], trace["phi_t"][valid]),
                            (trace["theta_r"][valid], trace["phi_r"][valid])):
             elevation = np.pi / 2 - theta  # the rows' factor of each beam's elevation row j, then the element's
-            factor *= self.beams.vertical_factor(elevation) * element_factor(phi - yaw, elevation, q)
+            factor *= self.beams.vertical_factor(elevation)[rows] * element_factor(phi - yaw, elevation, q)
         gains = beam_gains(self.beams, coefficients, k) * factor
         kind = np.where(trace["diffuse"][valid], PathKind.DIFFUSE, PathKind.SPECULAR)
         angle = np.angle(np.exp(1j * (trace["phi_t"][valid] - pose[2])))
         return (delay[valid].astype(np.float64), np.ones(len(kind), dtype=np.complex128), angle,
-                np.full(len(kind), -1), trace["first"][valid].astype(np.float64), gains, kind)
+                np.full(len(kind), -1), trace["first"][valid].astype(np.float64), kind, (rows, gains))
 
 
 def scene_digest(scene: Scene, mesh: Mesh | None) -> str:
