@@ -10,7 +10,7 @@ The estimate counts the largest arrays, each with the number of copies that is a
 - the echo paths' beam gains, complex128, paths × beams, twice (the gains and their product with the
   amplitudes); the paths of the channel backend (:func:`expected_paths`): the flat caster's rays × hits;
   the 2.5D caster's (elevation rows) rays × hits × rows and the floor's and ceiling's fan; Sionna RT's
-  ``SIONNA_PATHS_PER_SAMPLE`` per diffuse sample and orientation;
+  ``SIONNA_PATHS_PER_SAMPLE`` per diffuse sample and orientation (more in a closed room);
 - the ray caster's (rays × segments) float64 tables, about 10 alive at once, in blocks of at most
   ``TABLE_CELLS`` cells (:mod:`radioslam.scene.raycast`), and the 2.5D caster's (rays × hits) × elevation
   quadrature tables (:mod:`radioslam.sim.elevated`);
@@ -40,7 +40,9 @@ QUADRATURE_TABLES = 8  # the 2.5D caster's (columns × cells) float64 tables ali
 QUADRATURE_CELLS = 720  # its elevation quadrature: 180° / WALL_STEP_DEG
 SIONNA_TRACE_BASE = 500 * 2**20
 SIONNA_BYTES_PER_SAMPLE = 8 * 2**10
-SIONNA_PATHS_PER_SAMPLE = 0.4  # per orientation: 0.32 measured in a closed room (floor and ceiling)
+# Sionna's paths per diffuse sample and orientation, with no floor or ceiling (0.053 measured on the extruded
+# paper-cnv: the rays up and down escape) and in a closed room (0.32 with both), and in between for one
+SIONNA_PATHS_PER_SAMPLE = (0.1, 0.4)
 
 
 @dataclass(frozen=True)
@@ -73,11 +75,12 @@ def default_budget() -> int:
 
 
 def expected_paths(radio, channel: ChannelKind = ChannelKind.BUILTIN, planes: int = 0) -> tuple[int, str]:
-    """How many echo paths one pose gives (at most, or for Sionna as measured in a closed room), and the
-    field that drives it; ``planes`` is the number of an extrusion's floor and ceiling (0 … 2)."""
+    """How many echo paths one pose gives (at most, or for Sionna as measured), and the field that drives
+    it; ``planes`` is the number of the scene's floor and ceiling (0 … 2; a Mitsuba scene counts as 2)."""
     if ChannelKind(channel) is ChannelKind.SIONNA:
-        return (math.ceil(SIONNA_PATHS_PER_SAMPLE * radio.sionna_samples * radio.orientations),
-                "radio.sionna_samples")
+        open_room, closed = SIONNA_PATHS_PER_SAMPLE
+        per_sample = open_room + (closed - open_room) * planes / 2
+        return math.ceil(per_sample * radio.sionna_samples * radio.orientations), "radio.sionna_samples"
     columns = math.ceil(360.0 / radio.ray_spacing_deg) * radio.max_hits
     if radio.elevation_beams == 1:
         return columns, "radio.ray_spacing_deg"

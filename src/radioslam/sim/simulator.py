@@ -114,6 +114,7 @@ class Simulator:
         """What simulating one pose needs, before anything is allocated (:mod:`radioslam.sim.memory`)."""
         extrude = None if self.scene is None else self.scene.spec.extrude
         planes = 0 if extrude is None else (extrude.floor is not None) + (extrude.ceiling is not None)
+        planes = 2 if self.scene is not None and self.scene.spec.mitsuba is not None else planes  # closed, likely
         return pose_memory(len(self.rows), self.window_length, self.radio,
                            0 if self.scene is None else len(self.scene.segments), channel=self.channel_kind,
                            planes=planes)
