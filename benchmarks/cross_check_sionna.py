@@ -24,11 +24,14 @@ import numpy as np
 
 from radioslam.antenna.codebook import BeamSet
 from radioslam.choices import ChannelKind
+from radioslam.eval.map3d import match_surfaces
 from radioslam.scene import load_scene
+from radioslam.scene.extrude import scene_mesh
 from radioslam.scene.loader import scene_from_mapping
 from radioslam.sensing import Receiver
 from radioslam.sim import Simulator, beam_path_gains
 from radioslam.sim.paths import PathKind
+from radioslam.slam.se2 import transform_points
 
 C = 299_792_458.0
 
@@ -82,6 +85,8 @@ def cross_check(label, scene, poses, seed):
     sims = {kind: Simulator.from_scene(scene, channel=kind) for kind in ChannelKind}
     receiver = Receiver(scene.radio, scene.radio.hardware_delay_s)
     delays, spec_power, diff_power, extra, dist_sb, dist_bs, counts, seconds = [], [], [], 0, [], [], [], []
+    horizontal_sb, off_mesh = [], {kind: [] for kind in ChannelKind}
+    mesh = scene_mesh(scene)
     for i in poses:
         tick = time.perf_counter()
         sionna = sims[ChannelKind.SIONNA].channel.paths(scene.poses[i], leakage=False)
@@ -95,7 +100,11 @@ def cross_check(label, scene, poses, seed):
                  for kind, sim in sims.items()}
         b, s = scans[ChannelKind.BUILTIN], scans[ChannelKind.SIONNA]
         dist_sb.append(nearest_same_beam(s, b)), dist_bs.append(nearest_same_beam(b, s))
+        horizontal_sb.append(s.elevation_beam == 0)
         counts.append((len(b), len(s)))
+        for kind, scan in scans.items():  # each point's distance to the true surfaces
+            world = np.column_stack([transform_points(scene.poses[i], scan.xy), scan.z + scene.radio.height_m])
+            off_mesh[kind].append(match_surfaces(world, mesh).distance_m)
     d, sp, dp = (np.concatenate(x) for x in (delays, spec_power, diff_power))
     sb, bs = np.concatenate(dist_sb), np.concatenate(dist_bs)
     n_b, n_s = np.sum(counts, axis=0)
@@ -106,6 +115,14 @@ def cross_check(label, scene, poses, seed):
           f"{len(dp)}: {np.median(dp) if len(dp) else np.nan:+.1f} | "
           f"{n_b} / {n_s} | {within(sb)} ({np.median(sb[np.isfinite(sb)]) * 100:.1f} cm) | "
           f"{within(bs)} | {extra} |")
+    if scene.radio.elevation_beams > 1:
+        level = np.concatenate(horizontal_sb)
+        surface = {kind: np.concatenate(x) for kind, x in off_mesh.items()}
+        print(f"|  ↳ 3D | Sionna points within 5 cm of a builtin one: horizontal row {within(sb[level])}, other rows "
+              f"{within(sb[~level])} ({(~level).sum()} points) | points within 5 cm of the true surfaces: builtin "
+              f"{within(surface[ChannelKind.BUILTIN])} (median {np.median(surface[ChannelKind.BUILTIN]) * 100:.1f} cm), "
+              f"Sionna {within(surface[ChannelKind.SIONNA])} (median {np.median(surface[ChannelKind.SIONNA]) * 100:.1f} "
+              "cm) |||||||")
 
 
 def main() -> None:
