@@ -117,12 +117,11 @@ def cross_check(label, scene, poses, seed):
           f"{within(bs)} | {extra} |")
     if scene.radio.elevation_beams > 1:
         level = np.concatenate(horizontal_sb)
-        surface = {kind: np.concatenate(x) for kind, x in off_mesh.items()}
+        on_surface = {kind.value: f"{within(np.concatenate(x))} (median {np.median(np.concatenate(x)) * 100:.1f} cm)"
+                      for kind, x in off_mesh.items()}
         print(f"|  ↳ 3D | Sionna points within 5 cm of a builtin one: horizontal row {within(sb[level])}, other rows "
               f"{within(sb[~level])} ({(~level).sum()} points) | points within 5 cm of the true surfaces: builtin "
-              f"{within(surface[ChannelKind.BUILTIN])} (median {np.median(surface[ChannelKind.BUILTIN]) * 100:.1f} cm), "
-              f"Sionna {within(surface[ChannelKind.SIONNA])} (median {np.median(surface[ChannelKind.SIONNA]) * 100:.1f} "
-              "cm) |||||||")
+              f"{on_surface['builtin']}, Sionna {on_surface['sionna']} |||||||")
 
 
 def main() -> None:

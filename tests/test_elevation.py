@@ -81,7 +81,8 @@ def test_horizontal_row_is_the_flat_scans_channel():
         h_fan = channel_response(beam_path_gains(beams, fan_paths)[beams.elevation_index == 0], fan_paths.delay_s,
                                  p, 120e3)
         power = 10 * np.log10(np.sum(np.abs(h_fan) ** 2, axis=1) / np.sum(np.abs(h_flat) ** 2, axis=1))
-        corr = np.abs(np.sum(h_fan * h_flat.conj(), axis=1)) / np.linalg.norm(h_fan, axis=1) / np.linalg.norm(h_flat, axis=1)
+        corr = np.abs(np.sum(h_fan * h_flat.conj(), axis=1)) / (np.linalg.norm(h_fan, axis=1)
+                                                                 * np.linalg.norm(h_flat, axis=1))
         assert np.max(np.abs(power)) < 0.2 and corr.min() > 0.999
 
 

@@ -60,3 +60,12 @@ def cast_rays(origin: np.ndarray, angles: np.ndarray, segments: np.ndarray,
     keep = np.isfinite(dist) & ~repeat & (before > 0.0) & (dist <= max_range)
     return RayHits(angles, np.where(keep, dist, np.inf), np.where(keep, seg, -1), cos_h,
                    np.where(keep, before, 0.0))
+
+
+def cast_fan(origin: np.ndarray, heading: float, spacing_rad: float, segments: np.ndarray,
+             segment_transmission: np.ndarray, max_hits: int, max_range: float) -> tuple[np.ndarray, RayHits]:
+    """A full circle of rays about ``spacing_rad`` apart (a whole number of them), centred in their cells:
+    their angles (R,) relative to ``heading`` and their hits."""
+    n = int(round(2 * np.pi / spacing_rad))
+    local = -np.pi + (np.arange(n) + 0.5) * (2 * np.pi / n)
+    return local, cast_rays(origin, heading + local, segments, segment_transmission, max_hits, max_range)

@@ -20,15 +20,17 @@ cos ψ = cos ε·cos ψ_h and cos²ε = (ρ/R)² the slant range's extra spreadi
 column's point at ε_j, the P_j-weighted centroid of the elevations, and its delay τ_j is the slant path
 to it (TX at h₀ + b/2 → point → RX at h₀ − b/2). It reaches row j only (``EchoPaths.row``): its
 vertical pattern is in P_j. For a wall seen symmetrically (its foot and top as far below and above the
-arrays, or unbounded) the horizontal row's centroid is ε = 0 and W makes its path the flat caster's ray,
-in delay and phase exactly and in power to the 3D lobe's tenth of a dB: the horizontal row is the flat
-scan's channel. (A delay averaged over the slant paths instead lay 16 mm beyond the flat ray's; its
-phase then no longer added the near-normal diffuse echoes to the specular one as the flat caster does,
-and the horizontal row kept 40 % more points, most on oblique walls.) The integral is a quadrature on ``WALL_STEP_DEG``, each cell weighted by the part of it
-the wall covers, so a column's power moves continuously with ρ. (Sampling elevation with rays of their
-own instead made each column's rays add coherently near ε = 0, by an amount that depended on the
-spacing: the horizontal row's diffuse echoes rose 4 dB against its specular ones and the SLAM's ATE on
-paper-cnv went from 0.01 to 0.02–0.05 m with the spacing; docs/notes.md, session 26.)
+arrays) the horizontal row's centroid is ε = 0 and W makes its path the flat caster's ray, in delay and
+phase exactly and in power to the 3D lobe's tenth of a dB: the horizontal row is the flat scan's
+channel (and nearly so for a wall from the floor up without a top: the centroid 10⁻⁷ rad up). The
+integral is a quadrature on ``WALL_STEP_DEG``, each cell weighted by the part of it the wall covers, so a
+column's power moves continuously with ρ. Two earlier forms, measured on paper-cnv (docs/notes.md,
+session 26): elevation sampled by rays of their own (2° apart) made a column's rays add coherently near
+ε = 0 by an amount that depended on the spacing, the horizontal row's diffuse echoes rose 4 dB against
+its specular ones and the SLAM's ATE went from the flat scan's 0.01 m to 0.02–0.05 m with the spacing;
+a delay averaged over the slant paths lay 16 mm beyond the flat ray's, its phase no longer added the
+near-normal diffuse echoes to the specular one as the flat caster does, and the horizontal row kept 40 %
+more points, most of them on oblique walls.
 
 **Floor and ceiling, one path per ray of a fan.** Rays δ apart in azimuth and elevation
 (``radio.ray_spacing_3d_deg``) reach the floor (ε < 0) or ceiling (ε > 0) at ρ_f = |Δz|/tan|ε| where
@@ -47,7 +49,7 @@ import numpy as np
 from radioslam.antenna.codebook import ANY_ROW, BeamSet, vertical_factors
 from radioslam.config import SPEED_OF_LIGHT, RadioConfig
 from radioslam.scene.model import Scene
-from radioslam.scene.raycast import RayHits, cast_rays
+from radioslam.scene.raycast import RayHits, cast_fan
 
 FLOOR_SEGMENT, CEILING_SEGMENT = -2, -3  # EchoPaths.segment of a floor or ceiling echo (−1: leakage)
 WALL_STEP_DEG = 0.25  # the wall columns' elevation quadrature (a twentieth of a row's beam width)
@@ -108,11 +110,9 @@ def _lobes(scene: Scene, material: np.ndarray, incidence: np.ndarray) -> np.ndar
 def wall_column_paths(scene: Scene, pose: np.ndarray, radio: RadioConfig):
     """Each wall column's path per elevation row (module docstring): (delay, amplitude, azimuth, segment,
     point, elevation, row)."""
-    step = np.radians(radio.ray_spacing_deg)
-    n = int(round(2 * np.pi / step))
-    azimuth = -np.pi + (np.arange(n) + 0.5) * (2 * np.pi / n)
-    hits = cast_rays(pose[:2], pose[2] + azimuth, scene.segments, scene.material_array("transmission"),
-                     radio.max_hits, radio.max_range_m)
+    azimuth, hits = cast_fan(pose[:2], pose[2], np.radians(radio.ray_spacing_deg), scene.segments,
+                             scene.material_array("transmission"), radio.max_hits, radio.max_range_m)
+    step = 2 * np.pi / len(azimuth)
     ray, h = np.nonzero(hits.valid)
     rho, segment = hits.distance[ray, h], hits.segment[ray, h]
     # the quadrature over elevation, and the part of each cell the column covers (foot, top, max range)
@@ -146,13 +146,11 @@ def wall_column_paths(scene: Scene, pose: np.ndarray, radio: RadioConfig):
 def plane_paths(scene: Scene, pose: np.ndarray, radio: RadioConfig):
     """The floor's and ceiling's echoes of the fan (module docstring): (delay, amplitude, azimuth, segment,
     point, elevation)."""
-    step = np.radians(radio.ray_spacing_3d_deg)
-    n = int(round(2 * np.pi / step))
-    azimuth = -np.pi + (np.arange(n) + 0.5) * (2 * np.pi / n)
+    azimuth, hits = cast_fan(pose[:2], pose[2], np.radians(radio.ray_spacing_3d_deg), scene.segments,
+                             scene.material_array("transmission"), radio.max_hits, radio.max_range_m)
+    step = 2 * np.pi / len(azimuth)
     elevation, weight = elevation_fan(radio)
     d_el = np.pi / len(elevation)
-    hits = cast_rays(pose[:2], pose[2] + azimuth, scene.segments, scene.material_array("transmission"),
-                     radio.max_hits, radio.max_range_m)
     h0, extrude = radio.height_m, scene.spec.extrude
     seg = np.where(hits.valid, hits.segment, 0)
     t_wall = scene.material_array("transmission")[seg] ** 2 * hits.valid  # two-way T² of each wall hit

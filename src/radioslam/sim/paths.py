@@ -28,7 +28,7 @@ import numpy as np
 from radioslam.antenna.codebook import ANY_ROW
 from radioslam.config import SPEED_OF_LIGHT, RadioConfig, bistatic_delay_s
 from radioslam.scene.model import Scene
-from radioslam.scene.raycast import cast_rays
+from radioslam.scene.raycast import cast_fan, cast_rays
 from radioslam.sim.elevated import elevated_diffuse_paths
 from radioslam.sim.facets import facet_paths
 
@@ -83,11 +83,9 @@ def _echo(r, gain_wo_range, radio: RadioConfig):
 
 def diffuse_paths(scene: Scene, pose: np.ndarray, radio: RadioConfig):
     """One path per (ray, hit) of a full-circle fan of rays."""
-    step = np.radians(radio.ray_spacing_deg)
-    n = int(round(2 * np.pi / step))
-    local = -np.pi + (np.arange(n) + 0.5) * (2 * np.pi / n)
-    hits = cast_rays(pose[:2], pose[2] + local, scene.segments, scene.material_array("transmission"),
-                     radio.max_hits, radio.max_range_m)
+    local, hits = cast_fan(pose[:2], pose[2], np.radians(radio.ray_spacing_deg), scene.segments,
+                           scene.material_array("transmission"), radio.max_hits, radio.max_range_m)
+    n = len(local)
     ray, h = np.nonzero(hits.valid)
     seg = hits.segment[ray, h]
     r = hits.distance[ray, h]
