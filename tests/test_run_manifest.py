@@ -262,8 +262,8 @@ def test_an_empty_out_path_and_a_foreign_directory_are_refused(scene_file, tmp_p
 def test_poses_past_9999_are_named_kept_and_read_in_pose_order(tmp_path, monkeypatch):
     """The schema accepts 100,000 poses: pose 10,000's files are ``10000.*``, belong to their stage, and
     are read after 9999 (a four-digit pattern dropped them; a name sort put 10000 before 2)."""
-    from radioslam import pipeline
     from radioslam.io.manifest import stage_of
+    from radioslam.pipeline import slam as pipeline
     from radioslam.io.rundir import RunDir
 
     run = RunDir(tmp_path)

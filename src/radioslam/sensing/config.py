@@ -7,15 +7,9 @@ from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from radioslam.choices import Detector, PointFilter, Refinement
 from radioslam.config_file import load_section
 from radioslam.sensing.errors import SensingError
-
-
-class Detector(str, Enum):
-    """How targets are picked from each beam's range profile."""
-
-    SINGLE = "single"  # the paper's single target per beam: the strongest peak (§III-A)
-    MULTI = "multi"  # CFAR + successive cancellation on the matched-filter profile (§III-B)
 
 
 class CfarKind(str, Enum):
@@ -28,22 +22,6 @@ class Taper(str, Enum):
 
     NONE = "none"
     HANN = "hann"
-
-
-class PointFilter(str, Enum):
-    """Which single-target detections become points (§IV-A: the −13 dB rule against sidelobe returns)."""
-
-    SCAN_PEAK = "scan-peak"  # the paper's: within the threshold of the scan's strongest detection
-    # within the threshold of the strongest detection at the same range (±1 range cell), where a beam
-    # sidelobe of that echo would appear, and within point_floor_db of the scan's peak
-    SAME_RANGE = "same-range"
-
-
-class Refinement(str, Enum):
-    """How an integer range-profile peak is refined to a fractional lag (T2)."""
-
-    BRACKETED = "bracketed"  # both sides on a quarter-sample grid, safeguarded Newton per lobe that may win
-    PAPER_BISECTION = "paper-bisection"  # the paper's fractional-IFFT bisection (§III-A), to reproduce it
 
 
 # the range gate's default: with the leakage's lag measured at calibration the gate stops where the
