@@ -17,7 +17,7 @@ def rng() -> np.random.Generator:
 @pytest.fixture(scope="session")
 def demo_run(tmp_path_factory):
     """The demo's run directory (paper-cnv, seed 1), made once for every test that reads it."""
-    from radioslam.pipeline import run_scene
+    from radioslam.pipeline import RunOptions, run_scene
 
     out = tmp_path_factory.mktemp("demo")
-    return out, run_scene("paper-cnv", out, 1, None)[1]
+    return out, run_scene("paper-cnv", out, RunOptions(seed=1))[1]

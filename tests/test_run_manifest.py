@@ -263,8 +263,8 @@ def test_poses_past_9999_are_named_kept_and_read_in_pose_order(tmp_path, monkeyp
     """The schema accepts 100,000 poses: pose 10,000's files are ``10000.*``, belong to their stage, and
     are read after 9999 (a four-digit pattern dropped them; a name sort put 10000 before 2)."""
     from radioslam.io.manifest import stage_of
-    from radioslam.pipeline import slam as pipeline
     from radioslam.io.rundir import RunDir
+    from radioslam.pipeline import slam as pipeline
 
     run = RunDir(tmp_path)
     assert run.scan_file(10_000).name == "10000.ply" and run.scan_file(7).name == "0007.ply"

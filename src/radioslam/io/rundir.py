@@ -96,6 +96,10 @@ class RunDir:
     def scan_file(self, pose_index: int) -> Path:
         return self.scans / f"{pose_index:04d}.ply"
 
+    def heatmap_file(self, pose_index: int) -> Path:
+        """scans/NNNN.png: a pose's radar heatmap and point cloud (the sense stage's figure)."""
+        return self.scans / f"{pose_index:04d}.png"
+
     @staticmethod
     def pose_timestamps(count: int) -> np.ndarray:
         """Poses are stamped 1 s apart, t = index."""

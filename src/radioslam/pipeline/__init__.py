@@ -7,12 +7,13 @@ module per stage; this package is the application layer (nothing below it import
 
 from radioslam.pipeline.calibration import calibrate_simulated, calibrated_receiver, simulated_calibration
 from radioslam.pipeline.evaluate import evaluate_stage, map_3d_metrics, map_point_cells
-from radioslam.pipeline.run import SIMULATED_ODOMETRY, report_stage, run_scene
-from radioslam.pipeline.sense import sensing_settings, simulate_and_sense
-from radioslam.pipeline.simulate import scene_simulator, simulate_stage, write_json
+from radioslam.pipeline.run import SIMULATED_ODOMETRY, RunOptions, report_stage, run_scene
+from radioslam.pipeline.sense import capture_files, sense_stage, sensing_settings, simulate_and_sense
+from radioslam.pipeline.simulate import capture_writer, scene_simulator, simulate_stage, write_json
 from radioslam.pipeline.slam import read_odometry, read_scans, slam_stage, write_slam_outputs
 
-__all__ = ["SIMULATED_ODOMETRY", "calibrate_simulated", "calibrated_receiver", "evaluate_stage", "map_3d_metrics",
-           "map_point_cells", "read_odometry", "read_scans", "report_stage", "run_scene", "scene_simulator",
-           "sensing_settings", "simulate_and_sense", "simulate_stage", "simulated_calibration", "slam_stage",
-           "write_json", "write_slam_outputs"]
+__all__ = ["SIMULATED_ODOMETRY", "RunOptions", "calibrate_simulated", "calibrated_receiver", "capture_files",
+           "capture_writer", "evaluate_stage", "map_3d_metrics", "map_point_cells", "read_odometry",
+           "read_scans", "report_stage", "run_scene", "scene_simulator", "sense_stage", "sensing_settings",
+           "simulate_and_sense", "simulate_stage", "simulated_calibration", "slam_stage", "write_json",
+           "write_slam_outputs"]

@@ -14,7 +14,7 @@ from threadpoolctl import threadpool_limits
 
 from radioslam.errors import RadioslamError
 from radioslam.io.atomic import atomic_write_text
-from radioslam.pipeline import run_scene
+from radioslam.pipeline import RunOptions, run_scene
 from radioslam.scene import load_scene, scene_to_yaml
 from radioslam.sensing import SensingConfig
 from radioslam.slam import SlamConfig
@@ -66,9 +66,10 @@ def run_one(run: RunSpec, out: str) -> dict:
         with threadpool_limits(1), warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             scene = _scene_argument(run, Path(out) / "inputs")
-            _, metrics = run_scene(scene, run_dir, run.seed, run.snr_db,
-                                   cfg=SlamConfig.model_validate(run.overrides["slam"]),
-                                   sensing=SensingConfig.model_validate(run.overrides["sensing"]))
+            options = RunOptions(seed=run.seed, snr_db=run.snr_db,
+                                 slam=SlamConfig.model_validate(run.overrides["slam"]),
+                                 sensing=SensingConfig.model_validate(run.overrides["sensing"]))
+            _, metrics = run_scene(scene, run_dir, options)
         row.update(status=OK, snr_db=load_scene(str(run_dir / "scene.yaml")).radio.snr_db, **flatten(metrics))
     except RadioslamError as exc:
         row["error"] = exc.one_line()

@@ -20,6 +20,7 @@ import numpy as np
 
 from radioslam.config import DataMode, RadioConfig
 from radioslam.eval.point_targets import capture_point_targets, nearest_beam, point_paths
+from radioslam.progress import SILENT, Progress
 from radioslam.sensing import Receiver, SensingConfig, Taper
 from radioslam.sensing.estimate import estimate_channel
 from radioslam.sensing.profile import mf_spectrum
@@ -69,7 +70,7 @@ def mf_profile(radio: RadioConfig, receiver: Receiver, snr: float, mode: str, rn
 
 
 def run_fig5(radio: RadioConfig | None = None, snr_db=(-10.0, -5.0, 0.0, 5.0, 10.0, 15.0, 20.0), trials: int = 30,
-             seed: int = 0) -> Fig5Result:
+             seed: int = 0, progress: Progress = SILENT) -> Fig5Result:
     radio = radio or RadioConfig()
     receiver = Receiver(radio, radio.hardware_delay_s, SensingConfig(detector="multi"))
     rng = np.random.default_rng(seed)
@@ -77,6 +78,7 @@ def run_fig5(radio: RadioConfig | None = None, snr_db=(-10.0, -5.0, 0.0, 5.0, 10
     peak = {m: np.zeros(len(snr)) for m in MODES}
     mean = {m: np.zeros(len(snr)) for m in MODES}
     example = {}
+    progress.start("Fig. 5: sidelobes", len(snr) * len(MODES))
     for i, s in enumerate(snr):
         for mode in MODES:
             stats = np.array([sidelobes(mf_profile(radio, receiver, s, mode, rng))[:2] for _ in range(trials)])
@@ -84,4 +86,5 @@ def run_fig5(radio: RadioConfig | None = None, snr_db=(-10.0, -5.0, 0.0, 5.0, 10
             mean[mode][i] = float(10 * np.log10(np.mean(10 ** (stats[:, 1] / 10))))
             if i == len(snr) - 1:
                 example[mode] = sidelobes(mf_profile(radio, receiver, s, mode, rng))[2]
+            progress.advance()
     return Fig5Result(snr, peak, mean, trials, example)

@@ -17,6 +17,7 @@ import numpy as np
 
 from radioslam.config import RadioConfig
 from radioslam.eval.point_targets import capture_point_targets, nearest_beam, point_paths
+from radioslam.progress import SILENT, Progress
 from radioslam.sensing import Detector, Receiver, SensingConfig
 from radioslam.sensing.detect import pdp_peaks
 from radioslam.sensing.profile import pdp_spectrum
@@ -47,7 +48,8 @@ class Fig8Result:
                 "false_alarm_rate_mf": self.false_alarm_rate_mf}
 
 
-def run_fig8(radio: RadioConfig | None = None, snr_db: float = 10.0, trials: int = 100, seed: int = 0) -> Fig8Result:
+def run_fig8(radio: RadioConfig | None = None, snr_db: float = 10.0, trials: int = 100, seed: int = 0,
+             progress: Progress = SILENT) -> Fig8Result:
     """``snr_db`` is the per-RE SNR of the 8 m target on the 45° beam."""
     radio = radio or RadioConfig()
     row = nearest_beam(radio, BEARING_RAD)
@@ -56,6 +58,7 @@ def run_fig8(radio: RadioConfig | None = None, snr_db: float = 10.0, trials: int
     rng = np.random.default_rng(seed)
     snr = snr_db + 20 * np.log10(np.array(GAINS) / GAINS[0])
     hits_pdp = hits_mf = false_mf = 0
+    progress.start("Fig. 8: two targets", trials)
     for trial in range(trials):
         phases = np.array([0.0, rng.uniform(0, 2 * np.pi)])
         cap = capture_point_targets(radio, point_paths(radio, RANGES_M, BEARING_RAD, snr, phases), [row], rng)
@@ -69,6 +72,7 @@ def run_fig8(radio: RadioConfig | None = None, snr_db: float = 10.0, trials: int
             pdp = pdp_rx.sense(cap)
             axis = pdp.profile_range_m[0]
             example = (axis, _norm_db(pdp.profile_power[0]), _norm_db(mf.profile_power[0]), pdp_ranges, mf_ranges)
+        progress.advance()
     return Fig8Result(float(snr_db), trials, hits_pdp / trials, hits_mf / trials, false_mf / trials, *example)
 
 

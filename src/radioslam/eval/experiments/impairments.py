@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 from radioslam.config import Impairments, RadioConfig
 from radioslam.eval.experiments.table1 import Table1Result, run_table1
+from radioslam.progress import SILENT, Progress
 
 # iq: a mixer's 30–35 dB image rejection; adc: the USRP-2974's 14 bits; pa: driven for range; elements:
 # uncalibrated phase shifters; drift: temperature between calibration and use; phase-noise, leakage and
@@ -49,17 +50,18 @@ class ImpairmentRow:
                 "hardware_delay_error_s": self.hardware_delay_error_s}
 
 
-def table1_under(profile: str, trials: int = 20, seed: int = 0, crb: bool = True) -> Table1Result:
+def table1_under(profile: str, trials: int = 20, seed: int = 0, crb: bool = True,
+                 progress: Progress = SILENT) -> Table1Result:
     """Table I with the radio's impairments set to ``PROFILES[profile]`` (CRB sweep optional)."""
     radio = RadioConfig(impairments=PROFILES[profile])
-    return run_table1(radio, trials, seed) if crb else run_table1(radio, trials, seed, crb_snr_db=())
+    return run_table1(radio, trials, seed, **({} if crb else {"crb_snr_db": ()}), progress=progress)
 
 
-def run_impairment_table(trials: int = 20, seed: int = 0) -> list[ImpairmentRow]:
+def run_impairment_table(trials: int = 20, seed: int = 0, progress: Progress = SILENT) -> list[ImpairmentRow]:
     """Table I's ranging RMSE under every profile, one row each (the same seeds throughout)."""
     rows = []
     for name in PROFILES:
-        r = table1_under(name, trials, seed, crb=False)
+        r = table1_under(name, trials, seed, crb=False, progress=progress)
         rows.append(ImpairmentRow(name, r.rmse_ifft_m, r.rmse_bisection_m, r.rmse_paper_bisection_m,
                                   r.hardware_delay_est_s - r.hardware_delay_true_s))
     return rows

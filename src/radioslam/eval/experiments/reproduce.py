@@ -8,13 +8,14 @@ from radioslam.eval.experiments.fig5 import MODES, run_fig5
 from radioslam.eval.experiments.fig8 import RANGES_M, run_fig8
 from radioslam.eval.experiments.impairments import PROFILES, run_impairment_table, table1_under
 from radioslam.io.tables import write_table
+from radioslam.progress import SILENT, Progress
 
 
-def _table1(out: Path, seed: int, trials: int | None, impairments: str = "ideal") -> dict:
+def _table1(out: Path, seed: int, trials: int | None, progress: Progress, impairments: str = "ideal") -> dict:
     """Table I; under ``impairments`` (a name of :data:`PROFILES`) the radio has that hardware."""
     from radioslam.viz.figures import table1_figure
 
-    r = table1_under(impairments, trials=trials or 50, seed=seed)
+    r = table1_under(impairments, trials=trials or 50, seed=seed, progress=progress)
     write_table(out / "table1", ["range_m", "err_ifft_m", "err_bisection_m", "err_paper_bisection_m"],
                 [[float(a), float(b), float(c), float(d)]
                  for a, b, c, d in zip(r.ranges_m, r.err_ifft_m, r.err_bisection_m, r.err_paper_bisection_m)])
@@ -24,10 +25,10 @@ def _table1(out: Path, seed: int, trials: int | None, impairments: str = "ideal"
     return {**r.to_json(), "impairments": impairments}
 
 
-def _fig5(out: Path, seed: int, trials: int | None) -> dict:
+def _fig5(out: Path, seed: int, trials: int | None, progress: Progress) -> dict:
     from radioslam.viz.figures import fig5_figure
 
-    r = run_fig5(trials=trials or 30, seed=seed)
+    r = run_fig5(trials=trials or 30, seed=seed, progress=progress)
     rows = [[float(s)] + [float(r.peak_sidelobe_db[m][i]) for m in MODES] + [float(r.mean_sidelobe_db[m][i])
                                                                              for m in MODES]
             for i, s in enumerate(r.snr_db)]
@@ -36,25 +37,25 @@ def _fig5(out: Path, seed: int, trials: int | None) -> dict:
     return r.to_json()
 
 
-def _fig8(out: Path, seed: int, trials: int | None) -> dict:
+def _fig8(out: Path, seed: int, trials: int | None, progress: Progress) -> dict:
     from radioslam.viz.figures import fig8_figure
 
-    r = run_fig8(trials=trials or 100, seed=seed)
+    r = run_fig8(trials=trials or 100, seed=seed, progress=progress)
     write_table(out / "fig8", ["method", "detect_rate_9m"],
                 [["PDP peaks", r.detect_rate_pdp], ["MF + successive cancellation", r.detect_rate_mf]])
     fig8_figure(out / "fig8.png", r, RANGES_M)
     return r.to_json()
 
 
-def _fig6(out: Path, seed: int, trials: int | None) -> dict:
+def _fig6(out: Path, seed: int, trials: int | None, progress: Progress) -> dict:
     """Fig. 6: the whole pipeline on paper-cnv (one run; ``trials`` does not apply), its run
     directory kept under fig6-run/ with report.html."""
     import shutil
 
-    from radioslam.pipeline import report_stage, run_scene
+    from radioslam.pipeline import RunOptions, report_stage, run_scene
 
     run = out / "fig6-run"
-    _, metrics = run_scene("paper-cnv", run, seed, None)
+    _, metrics = run_scene("paper-cnv", run, RunOptions(seed=seed), progress)
     report_stage(run)
     shutil.copyfile(run / "fig6.png", out / "fig6.png")
     write_table(out / "fig6", ["metric", "value"],
@@ -62,9 +63,9 @@ def _fig6(out: Path, seed: int, trials: int | None) -> dict:
     return metrics
 
 
-def _impairments(out: Path, seed: int, trials: int | None) -> dict:
+def _impairments(out: Path, seed: int, trials: int | None, progress: Progress) -> dict:
     """Table I's ranging RMSE under each hardware impairment alone and under the prototype's profile."""
-    rows = run_impairment_table(trials=trials or 20, seed=seed)
+    rows = run_impairment_table(trials=trials or 20, seed=seed, progress=progress)
     write_table(out / "impairments", ["profile", "rmse_ifft_m", "rmse_refined_m", "rmse_paper_bisection_m",
                                       "hardware_delay_error_s"],
                 [[r.profile, r.rmse_ifft_m, r.rmse_refined_m, r.rmse_paper_bisection_m, r.hardware_delay_error_s]
@@ -76,8 +77,9 @@ EXPERIMENTS = {"table1": _table1, "fig5": _fig5, "fig8": _fig8, "fig6": _fig6, "
 IMPAIRMENT_PROFILES = tuple(PROFILES)
 
 
-def run_experiment(name: str, out: Path, seed: int, trials: int | None, impairments: str = "ideal") -> dict:
+def run_experiment(name: str, out: Path, seed: int, trials: int | None, impairments: str = "ideal",
+                   progress: Progress = SILENT) -> dict:
     """One experiment; ``impairments`` applies to Table I only (the others run on the ideal radio)."""
     if name == "table1":
-        return _table1(out, seed, trials, impairments)
-    return EXPERIMENTS[name](out, seed, trials)
+        return _table1(out, seed, trials, progress, impairments)
+    return EXPERIMENTS[name](out, seed, trials, progress)

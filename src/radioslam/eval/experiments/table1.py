@@ -16,6 +16,7 @@ import numpy as np
 from radioslam.config import RadioConfig
 from radioslam.eval.crb import range_crb_m
 from radioslam.eval.point_targets import capture_point_targets, nearest_beam, point_paths
+from radioslam.progress import SILENT, Progress
 from radioslam.sensing import Receiver, Refinement, SensingConfig, estimate_hardware_delay
 from radioslam.sensing.detect import leakage_cancelled
 from radioslam.sim.calibration_targets import calibration_ranges, plate_simulator, simulate_calibration
@@ -54,7 +55,8 @@ class Table1Result:
                 "rmse_paper_bisection_m": self.rmse_paper_bisection_m}
 
 
-def plate_errors(radio: RadioConfig, receiver: Receiver, paper: Receiver, range_m: float, trials: int, seed: int):
+def plate_errors(radio: RadioConfig, receiver: Receiver, paper: Receiver, range_m: float, trials: int, seed: int,
+                 progress: Progress = SILENT):
     """(ε1, ε2, ε2 of ``paper``, the same receiver refining by the paper's bisection) of ``trials``
     captures of the plate at ``range_m``, each (trials,)."""
     sim = plate_simulator(radio, range_m)
@@ -69,10 +71,12 @@ def plate_errors(radio: RadioConfig, receiver: Receiver, paper: Receiver, range_
         e1.append(res.profile_range_m[0, np.argmax(gated)] - range_m)
         e2.append(res.range_m[0, 0] - range_m)
         e3.append(paper.sense(capture).range_m[0, 0] - range_m)
+        progress.advance()
     return np.array(e1), np.array(e2), np.array(e3)
 
 
-def crb_sweep(radio: RadioConfig, snr_db: np.ndarray, trials: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+def crb_sweep(radio: RadioConfig, snr_db: np.ndarray, trials: int, seed: int,
+              progress: Progress = SILENT) -> tuple[np.ndarray, np.ndarray]:
     """RMSE of the bisection for a point target at a random range in 4.5–5.5 m, and the CRB."""
     receiver = Receiver(radio, radio.hardware_delay_s, SensingConfig(min_range_m=NEAR_GATE_M))
     row = nearest_beam(radio, 0.0)
@@ -84,13 +88,15 @@ def crb_sweep(radio: RadioConfig, snr_db: np.ndarray, trials: int, seed: int) ->
             truth = rng.uniform(4.5, 5.5)
             cap = capture_point_targets(radio, point_paths(radio, truth, 0.0, snr), [row], rng)
             err.append(receiver.sense(cap).range_m[0, 0] - truth)
+            progress.advance()
         rmse.append(float(np.sqrt(np.mean(np.square(err)))))
     crb = range_crb_m(radio.n_subcarriers, radio.subcarrier_spacing_hz, radio.symbols_per_beam, snr_db)
     return np.array(rmse), np.asarray(crb)
 
 
 def run_table1(radio: RadioConfig | None = None, trials: int = 20, seed: int = 0,
-               crb_snr_db=(0.0, 5.0, 10.0, 15.0, 20.0), crb_trials: int = 100) -> Table1Result:
+               crb_snr_db=(0.0, 5.0, 10.0, 15.0, 20.0), crb_trials: int = 100,
+               progress: Progress = SILENT) -> Table1Result:
     radio = radio or RadioConfig()
     ranges = calibration_ranges(radio)  # the paper's Table I ranges are its calibration ranges
     # 1. eq. (11) calibration on its own plate measurements (other noise and data than the trials), and
@@ -101,11 +107,14 @@ def run_table1(radio: RadioConfig | None = None, trials: int = 20, seed: int = 0
     paper = Receiver(radio, cal.hardware_delay_s,
                      SensingConfig(min_range_m=NEAR_GATE_M, refine=Refinement.PAPER_BISECTION), cal.leakage)
     # 2. ε1 and ε2 (the receiver's refinement and the paper's bisection) over many noise trials per range
-    errors = [plate_errors(radio, receiver, paper, float(r), trials, seed + 100 + k) for k, r in enumerate(ranges)]
+    progress.start("Table I: plates", len(ranges) * trials)
+    errors = [plate_errors(radio, receiver, paper, float(r), trials, seed + 100 + k, progress)
+              for k, r in enumerate(ranges)]
     e1, e2, e3 = (np.array([e[i] for e in errors]) for i in range(3))
     # 3. the bisection against the CRB (calibration exact here, to isolate the estimator)
     snr = np.asarray(crb_snr_db, dtype=np.float64)
-    rmse, crb = crb_sweep(radio, snr, crb_trials, seed + 2)
+    progress.start("Table I: CRB sweep", len(snr) * crb_trials)
+    rmse, crb = crb_sweep(radio, snr, crb_trials, seed + 2, progress)
     return Table1Result(ranges, e1.mean(axis=1), e2.mean(axis=1), float(np.sqrt(np.mean(e1**2))),
                         float(np.sqrt(np.mean(e2**2))), cal.hardware_delay_s, radio.hardware_delay_s, trials,
                         snr, rmse, crb, e3.mean(axis=1), float(np.sqrt(np.mean(e3**2))))

@@ -1,0 +1,3 @@
+from radioslam.cli import main
+
+main()
