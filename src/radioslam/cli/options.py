@@ -60,6 +60,9 @@ STRICT_HELP = ("exit with status 3 when tracking was lost (a stretch of scans ma
                "one in which none fixed one pose: a direction nothing fixes, rival poses alike)")
 JSON_HELP = "print one JSON object of the metrics on stdout"
 SAVE_IQ_HELP = "write SigMF captures/NNNN.sigmf-{meta,data} (28 MB a pose) and sense them from the files"
+SCENE_FRAME_HELP = ("also write trajectory_scene.tum: the trajectory in the scene's frame (trajectory.tum is in "
+                    "the map frame, the terminal's at the first pose), for 'evo_ape tum ground_truth.tum "
+                    "trajectory_scene.tum' without -a; needs ground_truth.tum (a simulated run)")
 PLOT_POSE_HELP = "pose whose radar heatmap and cloud scans/NNNN.png shows (paper Fig. 4(b)); −1: none"
 
 
@@ -105,6 +108,10 @@ def strict_option():
 
 def save_iq_option():
     return typer.Option(False, "--save-iq", help=SAVE_IQ_HELP)
+
+
+def scene_frame_option():
+    return typer.Option(False, "--scene-frame", help=SCENE_FRAME_HELP)
 
 
 def plot_pose_option():

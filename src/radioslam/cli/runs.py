@@ -64,6 +64,7 @@ def run(
     odometry: Optional[Path] = typer.Option(None, "--odometry", help=opt.ODOMETRY_HELP + "; 'simulated': the "
                                             "scene's own (odometry.tum)"),
     strict: bool = opt.strict_option(),
+    scene_frame: bool = opt.scene_frame_option(),
     force: bool = opt.force_option(),
     max_memory: Optional[float] = opt.max_memory_option(),
     resume: bool = opt.resume_option(),
@@ -75,7 +76,7 @@ def run(
     """
     _run_all(scene, out, json_out, strict, config, opt.sensing_overrides(detector, threshold_db, point_filter, refine),
              seed=seed, snr_db=snr_db, save_iq=save_iq, channel=channel, plot_pose=plot_pose, odometry=odometry,
-             force=force, max_memory=max_memory, resume=resume)
+             scene_frame=scene_frame, force=force, max_memory=max_memory, resume=resume)
 
 
 @register(app)
@@ -93,6 +94,7 @@ def demo(
     refine: Optional[Refinement] = opt.refine_option(),
     plot_pose: int = opt.plot_pose_option(),
     strict: bool = opt.strict_option(),
+    scene_frame: bool = opt.scene_frame_option(),
     force: bool = opt.force_option(),
     max_memory: Optional[float] = opt.max_memory_option(),
     resume: bool = opt.resume_option(),
@@ -103,8 +105,8 @@ def demo(
     """
     _run_all(DEMO_SCENE, out, json_out, strict, config, opt.sensing_overrides(detector, threshold_db, point_filter,
                                                                               refine),
-             seed=seed, snr_db=snr_db, save_iq=save_iq, channel=channel, plot_pose=plot_pose, force=force,
-             max_memory=max_memory, resume=resume)
+             seed=seed, snr_db=snr_db, save_iq=save_iq, channel=channel, plot_pose=plot_pose,
+             scene_frame=scene_frame, force=force, max_memory=max_memory, resume=resume)
 
 
 @register(app)

@@ -13,7 +13,7 @@ from radioslam.choices import ChannelKind, Detector, PointFilter, Refinement
 from radioslam.cli import options as opt
 from radioslam.cli.app import app
 from radioslam.cli.options import register
-from radioslam.cli.output import detail, err, gib, info, progress, warn
+from radioslam.cli.output import detail, err, gib, info, out_path, progress, warn
 from radioslam.errors import RadioslamError
 
 TRACKING_LOST = 3  # exit status of --strict when tracking was lost
@@ -141,6 +141,7 @@ def slam(
     config: Optional[Path] = opt.config_option(),
     odometry: Optional[Path] = typer.Option(None, "--odometry", help=opt.ODOMETRY_HELP),
     strict: bool = opt.strict_option(),
+    scene_frame: bool = opt.scene_frame_option(),
     follow: bool = typer.Option(False, "--follow", help="map each pose as its scan (scans/NNNN.ply) or "
                                 "recording (captures/NNNN.sigmf-*, sensed with calibration.json) appears, its "
                                 "pose printed at once; the walk ends at scans/END or captures/END, after --idle "
@@ -153,14 +154,15 @@ def slam(
     if follow:
         from radioslam.live import follow_stage
 
-        if odometry is not None:
-            raise RadioslamError("--odometry needs every scan's pose up front; not with --follow", file=odometry,
-                                 field="--odometry")
+        if odometry is not None or scene_frame:
+            flag = "--odometry" if odometry is not None else "--scene-frame"
+            raise RadioslamError(f"{flag} needs the whole walk up front; not with --follow",
+                                 file="(command line)", field=flag)
         result = follow_stage(run_dir, cfg.slam, idle, _print_update, cfg.sensing)
     else:
         from radioslam.pipeline import slam_stage
 
-        result = slam_stage(run_dir, cfg.slam, odometry=odometry)
+        result = slam_stage(run_dir, cfg.slam, odometry=odometry, scene_frame=scene_frame)
     info(f"wrote {run_dir}: {len(result.poses)} poses, {len(result.loop_closures)} loop closures")
     report_slam(result, strict)
 
@@ -204,3 +206,17 @@ def report(
 
     path = report_stage(run_dir)
     info(f"wrote {path}")
+
+
+@register(app)
+def export(
+    run_dir: Path = typer.Argument(..., help="run directory after 'slam'"),
+    mcap: Path = typer.Option(..., "--mcap", parser=out_path, help="ROS 2 bag to write (MCAP; Foxglove Studio and "
+                              "RViz 2 open it)"),
+) -> None:
+    """Export a run as a ROS 2 bag (MCAP): scans as PointCloud2, paths, the occupancy grid, TF, loop closures."""
+    from radioslam.pipeline.export import export_mcap
+
+    counts = export_mcap(run_dir, mcap)
+    detail("messages: " + ", ".join(f"{topic} {count}" for topic, count in counts.items()))
+    info(f"wrote {mcap} ({sum(counts.values())} messages on {len(counts)} topics)")

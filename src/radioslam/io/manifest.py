@@ -49,16 +49,17 @@ _CAPTURES, _SCANS = r"captures/\d{4,}\.sigmf-(meta|data)", r"scans/\d{4,}\.ply"
 STAGE_FILES: dict[str, tuple[str, ...]] = {
     "simulate": (*_SIMULATED, _CAPTURES),
     "sense": (_SCANS, r"scans/\d{4,}\.png"),
-    "slam": (r"trajectory\.tum", r"trajectory_odometry\.tum", r"map\.pgm", r"map\.yaml", r"map\.ply", r"slam\.json"),
+    "slam": (r"trajectory\.tum", r"trajectory_odometry\.tum", r"trajectory_scene\.tum", r"map\.pgm", r"map\.yaml",
+             r"map\.ply", r"slam\.json"),
     "evaluate": (r"metrics\.json",),
-    "report": (r"report\.html", r"fig6\.png", r"scan_status\.png"),
+    "report": (r"report\.html", r"fig6\.png", r"scan_status\.png", r"map3d\.png"),
 }
 STAGES = tuple(STAGE_FILES)
 # the files of earlier stages each stage reads: recorded with their hashes as its inputs
 STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "simulate": (),  # the scene as given: its hash is in the settings (scene_sha256)
     "sense": (*_SIMULATED, _CAPTURES),
-    "slam": (_SCANS, r"odometry\.tum"),
+    "slam": (_SCANS, r"odometry\.tum", r"ground_truth\.tum"),
     "evaluate": (*_SIMULATED, _SCANS, *STAGE_FILES["slam"]),
     "report": (*_SIMULATED, *STAGE_FILES["sense"], *STAGE_FILES["slam"], *STAGE_FILES["evaluate"]),
 }

@@ -19,9 +19,11 @@ from radioslam.io.atomic import atomic_path
 from radioslam.io.errors import PlyError
 from radioslam.sensing.pointcloud import Scan
 
-VERTEX_DTYPE = [("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("power_db", "<f4"), ("beam", "<i2"),
+# property types Open3D's tensor reader keeps (uchar, int, float, double; 0.20 skips char, short, ushort and
+# uint with a warning), so every reader sees every property
+VERTEX_DTYPE = [("x", "<f8"), ("y", "<f8"), ("z", "<f8"), ("power_db", "<f4"), ("beam", "<i4"),
                 ("orientation", "<u1"), ("range_m", "<f8")]
-OPTIONAL_DTYPE = [("elevation_beam", "<i2")]
+OPTIONAL_DTYPE = [("elevation_beam", "<i4")]
 
 
 def write_scan(path: str | Path, scan: Scan, comment: str = "", xyz: np.ndarray | None = None) -> None:

@@ -35,6 +35,7 @@ class RunOptions:
     channel: ChannelKind = ChannelKind.BUILTIN
     save_iq: bool = False  # write captures/ and sense them from the files, as the stages one by one do
     plot_pose: int = 0  # the pose whose radar heatmap scans/NNNN.png shows (−1: none)
+    scene_frame: bool = False  # also trajectory_scene.tum, the trajectory in the scene's frame
     force: bool = False
     max_memory: int | None = None
     resume: bool = False
@@ -59,7 +60,7 @@ def run_scene(scene_name: str, out: Path, options: RunOptions | None = None,
     else:
         timings = simulate_and_sense(scene_name, out, o.seed, o.snr_db, progress, o.sensing, o.force, o.max_memory,
                                      o.resume, o.channel, o.radio, o.plot_pose)
-    result = slam_stage(out, o.slam, timings, RunDir(out).odometry if simulated else o.odometry)
+    result = slam_stage(out, o.slam, timings, RunDir(out).odometry if simulated else o.odometry, o.scene_frame)
     return result, evaluate_stage(out)
 
 

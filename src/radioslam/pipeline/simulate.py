@@ -58,7 +58,8 @@ def simulate_stage(scene_name: str, out: Path, seed: int, snr_db: float | None, 
     (given the files a resumed run kept); the scene, the run directory and the calibration. ``radio``
     overrides the scene's radio (a config file's ``radio:`` section; ``snr_db`` wins over it). With
     ``resume``, an unfinished run of the same scene, seed and settings there is gone on with."""
-    scene = load_scene(scene_name).with_radio(**(radio or {}), snr_db=snr_db)
+    given = {} if snr_db is None else {"snr_db": snr_db}
+    scene = load_scene(scene_name).with_radio(**{**(radio or {}), **given})
     # what one pose needs, and the calibration's empty sweep (every beam too), before anything is written
     check_budget(Simulator.from_scene(scene, channel=channel).memory(), max_memory or default_budget(), scene_name)
     check_channel(channel, scene, scene_name)

@@ -17,7 +17,7 @@ from radioslam.pipeline.simulate import write_json
 from radioslam.sensing.pointcloud import Scan
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, SlamResult
 from radioslam.slam.occupancy import occupancy_grid
-from radioslam.slam.se2 import transform_points
+from radioslam.slam.se2 import compose, transform_points
 from radioslam.slam.thinning import thin_scan
 
 
@@ -35,10 +35,14 @@ def read_scans(run: RunDir) -> list[Scan]:
 
 
 def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = None,
-               odometry: Path | None = None) -> SlamResult:
-    """Trajectories, maps and slam.json from scans/ (and an external odometry TUM file, if given)."""
+               odometry: Path | None = None, scene_frame: bool = False) -> SlamResult:
+    """Trajectories, maps and slam.json from scans/ (and an external odometry TUM file, if given); with
+    ``scene_frame``, trajectory_scene.tum too: the trajectory in the scene's frame, the map frame (the
+    terminal's frame at the first pose) placed at the first true pose of ground_truth.tum."""
     run, cfg = RunDir(out), cfg or SlamConfig()
     settings = {"slam": cfg.model_dump(mode="json"), "odometry": None if odometry is None else str(odometry)}
+    if scene_frame:
+        settings["scene_frame"] = True
     with RunManifest(out).stage("slam", settings, external=[odometry] if odometry is not None else []):
         scans = read_scans(run)
         odometry_poses = read_odometry(odometry, len(scans)) if odometry is not None else None
@@ -49,7 +53,21 @@ def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = 
             raise RadioslamError(exc.reason, file=exc.file or run.scans, field=exc.field) from None
         write_slam_outputs(run, scans, result, cfg, {**(timings or {}), "slam": time.perf_counter() - tick},
                            odometry)
+        if scene_frame:
+            write_scene_frame(run, result.poses)
     return result
+
+
+def write_scene_frame(run: RunDir, poses: np.ndarray) -> None:
+    """trajectory_scene.tum: ``poses`` (map frame) composed onto the first true pose."""
+    if not run.ground_truth.exists():
+        raise RadioslamError("no ground truth to place the map frame by (--scene-frame: a simulated run's)",
+                             file=run.ground_truth, field="(file)")
+    _, truth = read_tum(run.ground_truth)
+    if len(truth) != len(poses):
+        raise RadioslamError(f"{len(truth)} true poses for {len(poses)} scans", file=run.ground_truth,
+                             field="(poses)")
+    write_tum(run.trajectory_scene, run.pose_timestamps(len(poses)), compose(truth[0][None, :], poses))
 
 
 def write_slam_outputs(run: RunDir, scans: list[Scan], result: SlamResult, cfg: SlamConfig, timings: dict,
