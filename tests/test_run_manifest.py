@@ -307,4 +307,5 @@ def test_each_stage_records_the_files_it_read_with_the_hashes_they_had(tmp_path)
                                           "ground_truth.tum", "scene.yaml"]}
     # not the figure, nor the missing file
     assert stages["slam"]["inputs"] == {"scans/0000.ply": file_hash(run / "scans/0000.ply"),
+                                        "ground_truth.tum": file_hash(run / "ground_truth.tum"),  # --scene-frame
                                         str(odometry.resolve()): file_hash(odometry)}

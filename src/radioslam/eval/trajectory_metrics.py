@@ -27,6 +27,12 @@ def align(estimate: np.ndarray, truth: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return compose(transform, estimate), transform
 
 
+def pose_errors(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    """Each pose's position error (P,) after the SE(2) alignment (the ATE's terms)."""
+    aligned, _ = align(estimate, truth)
+    return np.linalg.norm(aligned[:, :2] - np.asarray(truth)[:, :2], axis=1)
+
+
 def ate_rmse(estimate: np.ndarray, truth: np.ndarray) -> float:
     """Absolute trajectory error: RMSE of the aligned positions (m)."""
     aligned, _ = align(estimate, truth)

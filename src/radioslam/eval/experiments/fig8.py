@@ -36,9 +36,10 @@ class Fig8Result:
     detect_rate_pdp: float
     detect_rate_mf: float
     false_alarm_rate_mf: float  # detections per trial farther than 0.3 m from both targets
-    range_axis_m: np.ndarray
-    pdp_db: np.ndarray  # one trial's profiles, normalized to their peaks
+    range_axis_m: np.ndarray  # a fine grid over the targets (7–11 m)
+    pdp_db: np.ndarray  # one trial's profiles on it, each normalized to its peak
     mf_db: np.ndarray
+    residual_db: np.ndarray  # the MF profile with its strongest path cancelled (re. the MF's peak)
     pdp_detections_m: np.ndarray
     mf_detections_m: np.ndarray
 
@@ -69,15 +70,32 @@ def run_fig8(radio: RadioConfig | None = None, snr_db: float = 10.0, trials: int
         hits_mf += bool(np.any(np.abs(mf_ranges - RANGES_M[1]) < TOLERANCE_M))
         false_mf += int(np.sum(np.min(np.abs(mf_ranges[:, None] - np.array(RANGES_M)), axis=1) >= TOLERANCE_M))
         if trial == 0:
-            pdp = pdp_rx.sense(cap)
-            axis = pdp.profile_range_m[0]
-            example = (axis, _norm_db(pdp.profile_power[0]), _norm_db(mf.profile_power[0]), pdp_ranges, mf_ranges)
+            example = (*fine_profiles(pdp_rx, mf, cap), pdp_ranges, mf_ranges)
         progress.advance()
     return Fig8Result(float(snr_db), trials, hits_pdp / trials, hits_mf / trials, false_mf / trials, *example)
 
 
-def _norm_db(power: np.ndarray) -> np.ndarray:
-    return 10 * np.log10(np.maximum(power / power.max(), 1e-12))
+def _norm_db(power: np.ndarray, peak: float | None = None) -> np.ndarray:
+    return 10 * np.log10(np.maximum(power / (power.max() if peak is None else peak), 1e-12))
+
+
+def fine_profiles(pdp_rx: Receiver, mf, cap, step_m: float = 0.01):
+    """The PDP's and the matched filter's profiles of one capture on a fine range grid over the targets (their
+    fractional-lag evaluations, the grid the refinement searches), and the MF's with its strongest path
+    cancelled (successive cancellation's first step, §III-B: what the second search sees)."""
+    grid = np.arange(RANGES_M[0] - 1.0, RANGES_M[1] + 2.0 + step_m / 2, step_m)
+    delay = 2.0 * np.sqrt(grid**2 + pdp_rx.radio.array_baseline_m**2 / 4) / 299_792_458.0 + pdp_rx.hardware_delay_s
+    _, _, est = pdp_rx.front_end(cap)
+    pdp = pdp_spectrum(est, pdp_rx.p, pdp_rx.n)
+    pdp_power = np.abs(pdp.at((delay * pdp_rx.fs - est.window_offset[0])[None, :]))[0] ** 2
+    lags = (delay * pdp_rx.fs - mf.window_offset[0])[None, :]
+    mf_field = mf.spectrum.at(lags)[0]
+    strongest = np.argmax(np.where(mf.valid[0], mf.power[0], -np.inf))
+    t1 = mf.delay_s[0, strongest] * pdp_rx.fs - mf.window_offset[0]
+    amplitude = mf.spectrum.at(np.array([[t1]]))[0, 0]  # one path of amplitude b gives F = b at its lag
+    kernel = mf.spectrum.kernel_with_derivatives(lags - t1, np.array([0]), order=0)[0, 0] / mf.spectrum.scale[0]
+    mf_power, residual = np.abs(mf_field) ** 2, np.abs(mf_field - amplitude * kernel) ** 2
+    return grid, _norm_db(pdp_power), _norm_db(mf_power), _norm_db(residual, mf_power.max())
 
 
 def pdp_detections(receiver: Receiver, cap) -> np.ndarray:
