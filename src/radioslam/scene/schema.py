@@ -18,6 +18,7 @@ from radioslam.scene.materials import ItuMaterial
 EXTENT_M = 10_000.0
 MAX_SEGMENTS = 20_000  # each pose casts a specular ray per segment against every segment
 MAX_POSES = 100_000
+TWO_PI = 6.283185307179586
 Coordinate = Annotated[float, Field(ge=-EXTENT_M, le=EXTENT_M)]
 Point = tuple[Coordinate, Coordinate]
 
@@ -67,8 +68,21 @@ class CircleSpec(_Strict):
 
 class TrajectorySpec(_Strict):
     circle: CircleSpec | None = None
-    poses: list[tuple[Coordinate, Coordinate, Annotated[float, Field(ge=-100.0, le=100.0)]]] | None = \
+    # x, y in metres and the heading θ in radians, counter-clockwise from +x (|θ| ≤ 2π: a degree would pass
+    # silently as a wrong heading)
+    poses: list[tuple[Coordinate, Coordinate, Annotated[float, Field(ge=-TWO_PI, le=TWO_PI)]]] | None = \
         Field(None, max_length=MAX_POSES)
+
+    @field_validator("poses", mode="before")
+    @classmethod
+    def _radians(cls, v):
+        if isinstance(v, list):
+            for k, pose in enumerate(v):
+                theta = pose[2] if isinstance(pose, (list, tuple)) and len(pose) == 3 else None
+                if isinstance(theta, (int, float)) and abs(theta) > TWO_PI:
+                    raise ValueError(f"pose {k}: θ = {theta:g} is not in radians (|θ| ≤ 2π ≈ 6.283); "
+                                     f"{theta:g}° is {theta * 3.141592653589793 / 180:.4f} rad")
+        return v
 
     @model_validator(mode="after")
     def _exactly_one(self) -> "TrajectorySpec":
