@@ -59,9 +59,13 @@ def load_section(path: str | Path, section: str, model: type[Model], error: type
         doc = {}
     if not isinstance(doc, dict):
         raise error("a config file is a mapping of sections", file=path, field="(top)")
+    return validated(model, doc.get(section) or {}, path, error, section)
+
+
+def validated(model: type[Model], value: object, path: Path, error: type[RadioslamError], *where: str) -> Model:
+    """``value`` as ``model``, or ``error`` naming ``path`` and the first bad field, dotted after ``where``."""
     try:
-        return model.model_validate(doc.get(section) or {})
+        return model.model_validate(value)
     except ValidationError as exc:
         first = exc.errors()[0]
-        where = ".".join([section, *(str(p) for p in first["loc"])])
-        raise error(first["msg"], file=path, field=where) from None
+        raise error(first["msg"], file=path, field=".".join([*where, *(str(p) for p in first["loc"])])) from None

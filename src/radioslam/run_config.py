@@ -14,10 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from pydantic import ValidationError
-
 from radioslam.config import RadioConfig
-from radioslam.config_file import load_section, read_yaml
+from radioslam.config_file import load_section, read_yaml, validated
 from radioslam.errors import RadioslamError
 from radioslam.sensing.config import SensingConfig
 from radioslam.slam.config import SlamConfig
@@ -61,10 +59,5 @@ def _radio_fields(section: object, path: Path) -> dict:
         return {}
     if not isinstance(section, dict):
         raise ConfigError("must be a mapping of radio fields", file=path, field="radio")
-    try:
-        checked = RadioConfig.model_validate(section)
-    except ValidationError as exc:
-        first = exc.errors()[0]
-        loc = [str(p) for p in first["loc"]]
-        raise ConfigError(first["msg"], file=path, field=".".join(["radio", *loc])) from None
+    checked = validated(RadioConfig, section, path, ConfigError, "radio")
     return {key: getattr(checked, key) for key in section}

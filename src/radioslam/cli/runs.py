@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import inspect
 from pathlib import Path
 from typing import Optional
 
@@ -79,34 +80,20 @@ def run(
              scene_frame=scene_frame, force=force, max_memory=max_memory, resume=resume)
 
 
-@register(app)
-def demo(
-    out: Path = opt.out_option(default=Path("runs/demo")),
-    seed: int = opt.seed_option(),
-    snr_db: Optional[float] = opt.snr_option(),
-    json_out: bool = opt.json_option(),
-    config: Optional[Path] = opt.config_option(),
-    save_iq: bool = opt.save_iq_option(),
-    channel: ChannelKind = opt.channel_option(),
-    detector: Optional[Detector] = opt.detector_option(),
-    threshold_db: Optional[float] = opt.threshold_option(),
-    point_filter: Optional[PointFilter] = opt.point_filter_option(),
-    refine: Optional[Refinement] = opt.refine_option(),
-    plot_pose: int = opt.plot_pose_option(),
-    strict: bool = opt.strict_option(),
-    scene_frame: bool = opt.scene_frame_option(),
-    force: bool = opt.force_option(),
-    max_memory: Optional[float] = opt.max_memory_option(),
-    resume: bool = opt.resume_option(),
-) -> None:
+def demo(**options) -> None:
     """Run the paper's Fig. 6 simulation end to end: paper-cnv, 60 poses on a 5 m circle, SNR 10 dB, waveform IQ.
 
-    The same as 'radioslam run paper-cnv', with every option of run but --odometry.
+    The same as 'radioslam run paper-cnv --out runs/demo', with every option of run but --odometry.
     """
-    _run_all(DEMO_SCENE, out, json_out, strict, config, opt.sensing_overrides(detector, threshold_db, point_filter,
-                                                                              refine),
-             seed=seed, snr_db=snr_db, save_iq=save_iq, channel=channel, plot_pose=plot_pose,
-             scene_frame=scene_frame, force=force, max_memory=max_memory, resume=resume)
+    run.__wrapped__(DEMO_SCENE, odometry=None, **options)
+
+
+# demo's options are run's: its signature, without the scene and --odometry, --out defaulting to runs/demo
+demo.__signature__ = inspect.signature(run.__wrapped__).replace(parameters=[
+    p.replace(default=opt.out_option(default=Path("runs/demo"))) if p.name == "out" else p
+    for p in inspect.signature(run.__wrapped__).parameters.values() if p.name not in ("scene", "odometry")])
+demo.__annotations__ = {k: v for k, v in run.__wrapped__.__annotations__.items() if k not in ("scene", "odometry")}
+register(app)(demo)
 
 
 @register(app)

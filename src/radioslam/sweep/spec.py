@@ -28,7 +28,7 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from radioslam.config_file import read_yaml
+from radioslam.config_file import read_yaml, validated
 from radioslam.errors import RadioslamError
 
 
@@ -116,11 +116,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     doc = read_yaml(path, SweepError)
     if not isinstance(doc, dict):
         raise SweepError("a sweep file is a mapping (scenes:, seeds:, snr_db: …)", file=path, field="(top)")
-    try:
-        spec = SweepSpec.model_validate(doc)
-    except ValidationError as exc:
-        first = exc.errors()[0]
-        raise SweepError(first["msg"], file=path, field=".".join(str(p) for p in first["loc"])) from None
+    spec = validated(SweepSpec, doc, path, SweepError)
     if not spec.scenes and spec.robustness is None:
         raise SweepError("names no run: give scenes: (and seeds:) or robustness:", file=path, field="scenes")
     _check_overrides(spec, path)
