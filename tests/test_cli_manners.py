@@ -136,31 +136,36 @@ def test_a_bad_config_is_one_line_naming_the_field(tmp_path, room, command, bad)
     assert not (tmp_path / "o").exists()  # refused before anything was written
 
 
-def test_stages_one_by_one_then_report(room, tmp_path):
-    """The stages one by one, each with --config where it takes one, then 'radioslam report DIR'."""
-    config = tmp_path / "config.yaml"
+@pytest.fixture(scope="module")
+def staged(tmp_path_factory):
+    """The stages one by one on the small room (seed 2, a config's sensing: section), then its report."""
+    base = tmp_path_factory.mktemp("staged")
+    room, config, run_dir = base / "room.yaml", base / "config.yaml", base / "r"
+    room.write_text(yaml.safe_dump(ROOM))
     config.write_text(yaml.safe_dump({"sensing": {"point_filter": "scan-peak"}}))
-    run_dir = tmp_path / "r"
-    for args in (("simulate", room, "--out", run_dir, "--save-iq", "--config", config),
-                 ("sense", run_dir, "--config", config, "--plot-pose", "2"), ("slam", run_dir, "--config", config),
-                 ("evaluate", run_dir), ("report", run_dir)):
-        out = cli(*args)
-        assert out.returncode == 0, (args, out.stderr)
+    outs = [cli(*args) for args in (("simulate", room, "--out", run_dir, "--save-iq", "--config", config, "--seed", 2),
+                                    ("sense", run_dir, "--config", config, "--plot-pose", "2"),
+                                    ("slam", run_dir, "--config", config), ("evaluate", run_dir), ("report", run_dir))]
+    return room, config, run_dir, outs
+
+
+def test_stages_one_by_one_then_report(staged):
+    """The stages one by one, each with --config where it takes one, then 'radioslam report DIR'."""
+    _, _, run_dir, outs = staged
+    assert [out.returncode for out in outs] == [0] * 5, [out.stderr for out in outs]
     assert (run_dir / "report.html").stat().st_size > 10_000 and (run_dir / "scans/0002.png").is_file()
-    assert out.stderr.strip() == f"wrote {run_dir / 'report.html'}"
+    assert outs[-1].stderr.strip() == f"wrote {run_dir / 'report.html'}"
     stages = json.loads((run_dir / "run.json").read_text())["stages"]
     assert stages["report"]["status"] == "complete"
     assert stages["sense"]["settings"]["sensing"]["point_filter"] == "scan-peak"
-    metrics = cli("evaluate", run_dir)
-    assert "ATE RMSE, SLAM" in metrics.stdout and " cm" in metrics.stdout  # names and units
+    assert "ATE RMSE, SLAM" in outs[3].stdout and " cm" in outs[3].stdout  # names and units
 
 
-def test_run_save_iq_is_the_stages_one_by_one(room, tmp_path):
-    """run --save-iq writes the captures and senses them from the files: the same scans as the stages."""
-    a = cli("run", room, "--out", tmp_path / "a", "--save-iq", "--seed", "2")
-    assert a.returncode == 0, a.stderr
-    for args in (("simulate", room, "--out", tmp_path / "b", "--save-iq", "--seed", "2"), ("sense", tmp_path / "b")):
-        assert cli(*args).returncode == 0
+def test_run_save_iq_is_the_stages_one_by_one(staged, tmp_path):
+    """run --save-iq writes the captures and senses them from the files: the scans the stages made."""
+    room, config, run_dir, _ = staged
+    out = cli("run", room, "--out", tmp_path / "a", "--save-iq", "--seed", "2", "--config", config)
+    assert out.returncode == 0, out.stderr
     assert len(list((tmp_path / "a/captures").glob("*.sigmf-data"))) == 6
     for k in range(6):
-        assert (tmp_path / f"a/scans/{k:04d}.ply").read_bytes() == (tmp_path / f"b/scans/{k:04d}.ply").read_bytes()
+        assert (tmp_path / f"a/scans/{k:04d}.ply").read_bytes() == (run_dir / f"scans/{k:04d}.ply").read_bytes()
