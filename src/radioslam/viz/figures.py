@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import matplotlib
+import matplotlib.ticker
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -86,12 +87,16 @@ def table1_figure(path, result) -> None:
     a.set_ylabel("mean ranging error (m)")
     a.set_title(f"Table I: RMSE ε1 {result.rmse_ifft_m:.3f} m, ε2 {result.rmse_bisection_m * 1e3:.1f} mm, "
                 f"the paper's bisection {result.rmse_paper_bisection_m * 1e3:.1f} mm", fontsize=9)
-    a.legend(loc="lower left", fontsize=8)
+    a.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3, fontsize=8, frameon=False)  # off the data
     b.semilogy(result.crb_snr_db, result.crb_rmse_m * 1e3, "s-", label="refined RMSE")
     b.semilogy(result.crb_snr_db, result.crb_m * 1e3, "k--", label="CRB")
     b.set_xlabel("per-RE SNR (dB)")
     b.set_ylabel("range error (mm)")
-    b.set_title(f"point target, worst RMSE/CRB = {result.crb_ratio:.2f}")
+    b.set_title(f"point target, worst RMSE/CRB = {result.crb_ratio:.2f}", fontsize=10)
+    lo, hi = b.get_ylim()
+    b.set_yticks([t for t in (0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100) if lo <= t <= hi])  # 1, 2, 5 mm
+    b.yaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+    b.yaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     b.legend()
     save_figure(fig, path)
 
