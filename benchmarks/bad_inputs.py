@@ -61,6 +61,11 @@ def _scene(d: Path, text: str) -> Path:
     return path
 
 
+def _config(d: Path, text: str) -> Path:
+    (d / "config.yaml").write_text(text)
+    return d / "config.yaml"
+
+
 def _radio(field: str) -> Callable[[Path], list[str]]:
     return lambda d: ["simulate", str(_scene(d, ROOM + f"radio: {{{field}}}\n")), "--out", str(d / "o")]
 
@@ -199,6 +204,18 @@ def cases(one_pose: Path, two_pose: Path) -> list[Case]:
                                                            "100000"]),
         Case("cli: a file name with markup", lambda d: ["simulate", str(d / ":thumbs_up:[b]x.yaml"), "--out",
                                                         str(d / "o")]),
+        # --config files, report and export (issue #17)
+        Case("config: an unknown section", lambda d: ["run", str(_scene(d, ROOM)), "--out", str(d / "o"), "--config",
+                                                      str(_config(d, "radar: {gain: 3}\n"))]),
+        Case("config: NaN in radio:", lambda d: ["run", str(_scene(d, ROOM)), "--out", str(d / "o"), "--config",
+                                                 str(_config(d, "radio: {snr_db: .nan}\n"))]),
+        Case("config: a list", lambda d: ["simulate", str(_scene(d, ROOM)), "--out", str(d / "o"), "--config",
+                                          str(_config(d, "- 1\n- 2\n"))]),
+        Case("config: missing file", lambda d: ["slam", str(d), "--config", str(d / "none.yaml")]),
+        Case("report: an empty directory", lambda d: ["report", str(d)]),
+        Case("export: before slam", lambda d: ["export", str(d), "--mcap", str(d / "x.mcap")]),
+        Case("export: scans damaged", _scans(two_pose, lambda r: (_ply_nan("power_db")(r),
+                                                                  ["export", str(r), "--mcap", str(r / "b.mcap")])[1])),
         # SigMF recordings
         Case("sigmf: meta is an array", _recording(one_pose, _meta(lambda m: [m]))),
         Case("sigmf: annotations: 5", _recording(one_pose, _meta(lambda m: m.update(annotations=5)))),
