@@ -98,6 +98,34 @@ def test_progress_off_a_terminal_is_a_line_every_interval(room, tmp_path):
     assert slow.returncode == 0 and "radioslam: Fig. 8: two targets: " in slow.stderr
 
 
+def test_progress_on_a_terminal_is_a_bar_that_goes_away(room, tmp_path):
+    """stderr a pseudo-terminal: rich's bar counts the poses up to 6/6, then is erased; no progress lines."""
+    import pty
+
+    leader, follower = pty.openpty()
+    child = subprocess.Popen([sys.executable, "-m", "radioslam.cli", "run", str(room), "--out", str(tmp_path / "r")],
+                             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=follower,
+                             env={**os.environ, "TERM": "xterm-256color", "COLUMNS": "100",
+                                  "RADIOSLAM_PROGRESS_INTERVAL": "0"})
+    os.close(follower)
+    chunks = []
+    while True:
+        try:
+            chunk = os.read(leader, 65536)
+        except OSError:  # the child closed the terminal
+            break
+        if not chunk:
+            break
+        chunks.append(chunk)
+    os.close(leader)
+    assert child.wait(timeout=300) == 0
+    shown = b"".join(chunks).decode(errors="replace")
+    frames = [frame for frame in shown.split("\r") if "simulating and sensing " in frame]
+    assert "━" in frames[0] and "0/6" in frames[0] and "6/6" in frames[-1]
+    assert "\x1b[1A\x1b[2K" in shown  # transient: the bar's line is cleared before 'wrote'
+    assert "radioslam: simulating and sensing:" not in shown and "wrote " in shown
+
+
 def test_config_sections_reach_their_stages(room, tmp_path):
     config = tmp_path / "config.yaml"
     config.write_text(yaml.safe_dump({"radio": {"snr_db": 5.0}, "sensing": {"detector": "multi"},
