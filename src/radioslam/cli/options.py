@@ -66,6 +66,10 @@ SCENE_FRAME_HELP = ("also write trajectory_scene.tum: the trajectory in the scen
 PLOT_POSE_HELP = "pose whose radar heatmap and cloud scans/NNNN.png shows (paper Fig. 4(b)); −1: none"
 
 
+def scene_argument():
+    return typer.Argument(..., help="scene YAML file or built-in name (see 'radioslam scenes')")
+
+
 def seed_option():
     return typer.Option(DEFAULT_SEED, "--seed", min=0, help=SEED_HELP)
 

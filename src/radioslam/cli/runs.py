@@ -49,7 +49,7 @@ def _run_all(scene: str, out: Path, json_out: bool, strict: bool, config: Option
 
 @register(app)
 def run(
-    scene: str = typer.Argument(..., help="scene YAML file or built-in name (see 'radioslam scenes')"),
+    scene: str = opt.scene_argument(),
     out: Path = opt.out_option(),
     seed: int = opt.seed_option(),
     snr_db: Optional[float] = opt.snr_option(),

@@ -21,7 +21,7 @@ TRACKING_LOST = 3  # exit status of --strict when tracking was lost
 
 @register(app)
 def simulate(
-    scene: str = typer.Argument(..., help="scene YAML file or built-in name (see 'radioslam scenes')"),
+    scene: str = opt.scene_argument(),
     out: Path = opt.out_option(),
     seed: int = opt.seed_option(),
     snr_db: Optional[float] = opt.snr_option(),
