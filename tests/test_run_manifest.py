@@ -309,3 +309,16 @@ def test_each_stage_records_the_files_it_read_with_the_hashes_they_had(tmp_path)
     assert stages["slam"]["inputs"] == {"scans/0000.ply": file_hash(run / "scans/0000.ply"),
                                         "ground_truth.tum": file_hash(run / "ground_truth.tum"),  # --scene-frame
                                         str(odometry.resolve()): file_hash(odometry)}
+
+
+@pytest.mark.parametrize("argv, recorded", [
+    (["/venv/bin/radioslam", "run", "paper-cnv"], ["radioslam", "run", "paper-cnv"]),
+    (["/src/radioslam/cli/__main__.py", "demo"], ["radioslam", "demo"]),
+    (["-c"], ["python", "-c", "…"]),
+    (["study.py", "--n", "3"], ["python", "study.py", "--n", "3"]),
+])
+def test_the_command_recorded_is_how_the_run_was_started(monkeypatch, argv, recorded):
+    from radioslam.io.manifest import invocation
+
+    monkeypatch.setattr(sys, "argv", argv)
+    assert invocation() == recorded

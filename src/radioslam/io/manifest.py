@@ -114,6 +114,17 @@ def _now() -> str:
     return datetime.now(timezone.utc).isoformat(timespec="seconds")
 
 
+def invocation() -> list[str]:
+    """What started this run: ``radioslam ARGS`` from the command line (its script or ``python -m``), else the
+    Python program with its arguments; ``python -c`` leaves no program to name."""
+    program = sys.argv[0] if sys.argv else ""
+    if Path(program).name == "radioslam" or Path(program).parts[-3:-1] == ("radioslam", "cli"):
+        return ["radioslam", *sys.argv[1:]]
+    if program in ("", "-c"):
+        return ["python", "-c", "…"]
+    return ["python", *sys.argv]
+
+
 def versions() -> dict[str, str]:
     """radioslam's, Python's and the main dependencies' versions."""
     found = {"radioslam": _version("radioslam"), "python": platform.python_version()}
@@ -185,7 +196,7 @@ class RunManifest:
         atomic_write_text(self.path, manifest.model_dump_json(indent=2) + "\n")
 
     def _fresh(self, seed: int | None = None, scene: str | None = None) -> Manifest:
-        return Manifest(run_id=uuid.uuid4().hex, created=_now(), command=list(sys.argv), versions=versions(),
+        return Manifest(run_id=uuid.uuid4().hex, created=_now(), command=invocation(), versions=versions(),
                         seed=seed, scene=scene)
 
     def new_run(self, seed: int, scene: str, force: bool = False, resume: bool = False) -> Manifest:
