@@ -92,6 +92,7 @@ def test_progress_off_a_terminal_is_a_line_every_interval(room, tmp_path):
     lines = [line for line in out.stderr.splitlines() if line.startswith("radioslam: simulating and sensing: ")]
     assert len(lines) >= 5 and "/6 (" in lines[0] and "/s, ETA " in lines[0]
     assert lines[-1].startswith("radioslam: simulating and sensing: 6/6 in ")
+    assert "radioslam: SLAM: 6/6 in " in out.stderr  # every stage speaks, SLAM too
     quiet = cli("run", room, "--out", tmp_path / "q", "-q", env={"RADIOSLAM_PROGRESS_INTERVAL": "0"})
     assert quiet.returncode == 0 and "simulating" not in quiet.stderr
     slow = cli("reproduce", "fig8", "--out", tmp_path / "f", "--trials", "3", env={"RADIOSLAM_PROGRESS_INTERVAL": "0"})

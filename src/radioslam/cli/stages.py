@@ -162,7 +162,8 @@ def slam(
     else:
         from radioslam.pipeline import slam_stage
 
-        result = slam_stage(run_dir, cfg.slam, odometry=odometry, scene_frame=scene_frame)
+        with progress() as shown:
+            result = slam_stage(run_dir, cfg.slam, odometry=odometry, scene_frame=scene_frame, progress=shown)
     info(f"wrote {run_dir}: {len(result.poses)} poses, {len(result.loop_closures)} loop closures")
     report_slam(result, strict)
 

@@ -60,7 +60,8 @@ def run_scene(scene_name: str, out: Path, options: RunOptions | None = None,
     else:
         timings = simulate_and_sense(scene_name, out, o.seed, o.snr_db, progress, o.sensing, o.force, o.max_memory,
                                      o.resume, o.channel, o.radio, o.plot_pose)
-    result = slam_stage(out, o.slam, timings, RunDir(out).odometry if simulated else o.odometry, o.scene_frame)
+    result = slam_stage(out, o.slam, timings, RunDir(out).odometry if simulated else o.odometry, o.scene_frame,
+                        progress)
     return result, evaluate_stage(out)
 
 

@@ -14,6 +14,7 @@ from radioslam.io.manifest import RunManifest
 from radioslam.io.ros_map import write_ros_map
 from radioslam.io.rundir import RunDir
 from radioslam.pipeline.simulate import write_json
+from radioslam.progress import SILENT, Progress
 from radioslam.sensing.pointcloud import Scan
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, SlamResult
 from radioslam.slam.occupancy import occupancy_grid
@@ -35,7 +36,7 @@ def read_scans(run: RunDir) -> list[Scan]:
 
 
 def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = None,
-               odometry: Path | None = None, scene_frame: bool = False) -> SlamResult:
+               odometry: Path | None = None, scene_frame: bool = False, progress: Progress = SILENT) -> SlamResult:
     """Trajectories, maps and slam.json from scans/ (and an external odometry TUM file, if given); with
     ``scene_frame``, trajectory_scene.tum too: the trajectory in the scene's frame, the map frame (the
     terminal's frame at the first pose) placed at the first true pose of ground_truth.tum."""
@@ -48,7 +49,7 @@ def slam_stage(out: Path, cfg: SlamConfig | None = None, timings: dict | None = 
         odometry_poses = read_odometry(odometry, len(scans)) if odometry is not None else None
         tick = time.perf_counter()
         try:
-            result = RadioSlam(cfg).run(scans, odometry_poses)
+            result = RadioSlam(cfg).run(scans, odometry_poses, progress)
         except RadioslamError as exc:  # the driver knows the field and reason, this stage the files
             raise RadioslamError(exc.reason, file=exc.file or run.scans, field=exc.field) from None
         write_slam_outputs(run, scans, result, cfg, {**(timings or {}), "slam": time.perf_counter() - tick},

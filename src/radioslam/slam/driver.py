@@ -7,6 +7,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from radioslam.progress import SILENT, Progress
 from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.config import SlamConfig
 from radioslam.slam.errors import SlamError
@@ -24,7 +25,7 @@ class RadioSlam:
         self.cfg = cfg or SlamConfig()
         self.loop_hook = loop_hook
 
-    def run(self, scans: list[Scan], odometry: np.ndarray | None = None) -> SlamResult:
+    def run(self, scans: list[Scan], odometry: np.ndarray | None = None, progress: Progress = SILENT) -> SlamResult:
         cfg = self.cfg
         if not any(len(s) >= cfg.scan.min_points for s in scans):
             raise SlamError(f"none of the {len(scans)} scans has {cfg.scan.min_points} points or more: "
@@ -32,6 +33,8 @@ class RadioSlam:
         if odometry is not None and len(odometry) != len(scans):
             raise SlamError(f"{len(odometry)} odometry poses for {len(scans)} scans", field="(odometry)")
         session = SlamSession(cfg, self.loop_hook, odometry)
+        progress.start("SLAM", len(scans))
         for scan in scans:
             session.add(scan)
+            progress.advance()
         return session.finish()
