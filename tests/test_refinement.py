@@ -66,6 +66,7 @@ def test_the_bisection_steps_into_the_neighbours_lobe_and_the_bracketed_refineme
 @given(first=st.floats(5.0, 6.0), gap=st.floats(1.2, 3.0), ratio=st.floats(0.3, 1.0),
        phase=st.floats(0.0, 2 * np.pi), second_after=st.booleans())
 @example(first=5.0, gap=1.201171875, ratio=1.0, phase=1.5, second_after=False)  # two equally high maxima
+@example(first=5.0, gap=1.203125, ratio=0.99999, phase=4.75, second_after=False)  # the highest at the window's end
 def test_the_bracketed_refinement_finds_the_highest_maximum_within_a_sample(first, gap, ratio, phase,
                                                                              second_after):
     """Two paths of any spacing beyond one cell, amplitude ratio and phase: the refined lag is the

@@ -7,11 +7,14 @@ skirt) the true maximum on the other side is never looked at. Here both sides ar
 1. |F| is sampled on a grid of ``GRID_STEP`` = 1/4 sample over [k − 1, k + 1] around the
    integer peak k (six DFT evaluations besides the three integer lags already known).
    Every grid local maximum whose value could still become the highest after refinement
-   is a contender: a lone path off the grid by at most half a step keeps at least
-   |K(step/2)| / |K(0)| of its amplitude, K the model's kernel (Dirichlet, or the taper's),
-   so a lobe whose grid maximum lies further below the best grid value cannot win.
-2. Each contender g is refined within the bracket [g − step, g + step], which holds a maximum
-   (|F(g)| is at least |F| at both ends) and, at a quarter sample, lies within one lobe (the
+   is a contender (an end of the grid counts when it is at least its one neighbour: a lobe
+   whose maximum lies between the last two samples rises to the end): a lone path off the grid
+   by at most half a step keeps at least |K(step/2)| / |K(0)| of its amplitude, K the model's
+   kernel (Dirichlet, or the taper's), so a lobe whose grid maximum lies further below the best
+   grid value cannot win.
+2. Each contender g is refined within the bracket [g − step, g + step] ∩ [k − 1, k + 1], which
+   holds the lobe's highest point in the window (|F(g)| is at least |F| at both ends of the
+   bracket, or g is the window's end) and, at a quarter sample, lies within one lobe (the
    main lobe is 2·N/n_sc ≥ 2.6 samples wide null to null), by safeguarded Newton iteration on
    the derivative of |F|² (``rtsafe``, Press et al., Numerical Recipes §9.4):
    d|F|²/dt = 2 Re(F̄ F′), d²|F|²/dt² = 2 (|F′|² + Re(F̄ F″)), F′ and F″ DFTs of S·jω and
@@ -32,7 +35,8 @@ from radioslam.sensing.bisection import RefinedPeaks
 from radioslam.sensing.profile import RangeSpectrum
 
 GRID_STEP = 0.25  # samples; well inside the main lobe (≥ 2.6 samples null to null)
-MAX_CONTENDERS = 2  # grid lobes refined per peak: within ±1 sample at most two main lobes fit
+MAX_CONTENDERS = 3  # grid lobes refined per peak: two main lobes fit within ±1 sample, and a third's
+# rising flank can reach an end of the window
 
 
 def grid_offsets() -> np.ndarray:
@@ -50,21 +54,20 @@ def straddle_ratio(spec: RangeSpectrum) -> np.ndarray:
 def contenders(magnitude: np.ndarray, keep: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Grid indices (A, C) of the best ``MAX_CONTENDERS`` grid local maxima per row of |F| (A, G)
     that clear ``keep`` (A,) times the row's best value, and whether each exists."""
-    inner = np.zeros_like(magnitude, dtype=bool)
-    inner[:, 1:-1] = (magnitude[:, 1:-1] >= magnitude[:, :-2]) & (magnitude[:, 1:-1] >= magnitude[:, 2:])
-    best = np.argmax(magnitude, axis=1)
-    inner[np.arange(len(best)), best] = True  # the best grid value, even at the grid's edge
-    strong = inner & (magnitude >= keep[:, None] * magnitude.max(axis=1, keepdims=True))
+    local = np.ones_like(magnitude, dtype=bool)  # at least each neighbour it has: the ends have one
+    local[:, 1:] &= magnitude[:, 1:] >= magnitude[:, :-1]
+    local[:, :-1] &= magnitude[:, :-1] >= magnitude[:, 1:]
+    strong = local & (magnitude >= keep[:, None] * magnitude.max(axis=1, keepdims=True))
     ranked = np.argsort(np.where(strong, -magnitude, np.inf), axis=1, kind="stable")[:, :MAX_CONTENDERS]
     return ranked, np.take_along_axis(strong, ranked, axis=1)
 
 
-def safeguarded_newton(spec: RangeSpectrum, start: np.ndarray, half_width: float, precision: float,
-                       max_steps: int) -> tuple[np.ndarray, np.ndarray, int]:
-    """Maximize |F| of each row of ``spec`` (R,) within [start − half_width, start + half_width]
-    from ``start``: the lags, F there and the DFT evaluations spent. Stops once every row's last
-    step is below ``precision`` / 4 samples, or after ``max_steps``."""
-    low, high, lag = start - half_width, start + half_width, start.astype(np.float64).copy()
+def safeguarded_newton(spec: RangeSpectrum, start: np.ndarray, low: np.ndarray, high: np.ndarray,
+                       precision: float, max_steps: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """Maximize |F| of each row of ``spec`` (R,) within [low, high] from ``start`` (inside it): the
+    lags, F there and the DFT evaluations spent. Stops once every row's last step is below
+    ``precision`` / 4 samples, or after ``max_steps``."""
+    low, high, lag = low.astype(np.float64), high.astype(np.float64), start.astype(np.float64).copy()
     spent, active = 0, np.arange(len(lag))  # the rows still moving: a row stops once its step is below
     for _ in range(max_steps):  # precision / 4, and only the others are evaluated again
         at = lag[active]
@@ -89,7 +92,8 @@ def bracketed_track(spec: RangeSpectrum, lag: np.ndarray, precision: float, max_
     """Re-refine paths (B,) already refined once, after the others were cancelled (RELAX): the
     maximum of |F| within half a sample of the previous lag, so that a path never leaves its own
     lobe for a neighbour's imperfectly cancelled one (two paths would merge)."""
-    refined, value, spent = safeguarded_newton(spec, lag, 2 * GRID_STEP, precision, max_steps)
+    refined, value, spent = safeguarded_newton(spec, lag, lag - 2 * GRID_STEP, lag + 2 * GRID_STEP, precision,
+                                               max_steps)
     return RefinedPeaks(refined[:, None], value[:, None], spent)
 
 
@@ -112,8 +116,11 @@ def bracketed_peaks(spec: RangeSpectrum, peaks: np.ndarray, values: np.ndarray, 
     # 2. the lobes that may still win, each refined within its own bracket
     ranked, exists = contenders(np.abs(grid_values), straddle_ratio(sub))
     rows, columns = np.nonzero(exists)
-    refined_lag, refined_value, spent = safeguarded_newton(sub.rows(rows), at[rows] + offsets[ranked[rows, columns]],
-                                                           GRID_STEP, precision, max_steps)
+    start = at[rows] + offsets[ranked[rows, columns]]
+    window = (at[rows] + offsets[0], at[rows] + offsets[-1])
+    refined_lag, refined_value, spent = safeguarded_newton(
+        sub.rows(rows), start, np.maximum(start - GRID_STEP, window[0]), np.minimum(start + GRID_STEP, window[1]),
+        precision, max_steps)
     # 3. the highest refined contender of each peak
     best_lag = np.full(exists.shape, np.nan)
     best_value = np.zeros(exists.shape, dtype=np.complex128)
