@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from radioslam.config import RadioConfig
+from radioslam.config import RadioConfig, bistatic_delay_s
 from radioslam.eval.point_targets import capture_point_targets, nearest_beam, point_paths
 from radioslam.progress import SILENT, Progress
 from radioslam.sensing import Detector, Receiver, SensingConfig
@@ -84,7 +84,7 @@ def fine_profiles(pdp_rx: Receiver, mf, cap, step_m: float = 0.01):
     fractional-lag evaluations, the grid the refinement searches), and the MF's with its strongest path
     cancelled (successive cancellation's first step, §III-B: what the second search sees)."""
     grid = np.arange(RANGES_M[0] - 1.0, RANGES_M[1] + 2.0 + step_m / 2, step_m)
-    delay = 2.0 * np.sqrt(grid**2 + pdp_rx.radio.array_baseline_m**2 / 4) / 299_792_458.0 + pdp_rx.hardware_delay_s
+    delay = bistatic_delay_s(grid, pdp_rx.radio.array_baseline_m) + pdp_rx.hardware_delay_s
     _, _, est = pdp_rx.front_end(cap)
     pdp = pdp_spectrum(est, pdp_rx.p, pdp_rx.n)
     pdp_power = np.abs(pdp.at((delay * pdp_rx.fs - est.window_offset[0])[None, :]))[0] ** 2
