@@ -35,8 +35,7 @@ def pose_errors(estimate: np.ndarray, truth: np.ndarray) -> np.ndarray:
 
 def ate_rmse(estimate: np.ndarray, truth: np.ndarray) -> float:
     """Absolute trajectory error: RMSE of the aligned positions (m)."""
-    aligned, _ = align(estimate, truth)
-    return float(np.sqrt(np.mean(np.sum((aligned[:, :2] - truth[:, :2]) ** 2, axis=1))))
+    return float(np.sqrt(np.mean(pose_errors(estimate, truth) ** 2)))
 
 
 def rpe_rmse(estimate: np.ndarray, truth: np.ndarray, delta: int = 1) -> float:
