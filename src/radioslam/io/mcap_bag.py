@@ -25,6 +25,7 @@ import numpy as np
 
 from radioslam.io.atomic import atomic_path
 from radioslam.io.ros2_messages import message_definition
+from radioslam.io.ros_map import FREE, OCCUPIED
 from radioslam.sensing.pointcloud import Scan
 
 POINT_FIELDS = [("x", 7, "<f4"), ("y", 7, "<f4"), ("z", 7, "<f4"), ("power_db", 7, "<f4"), ("range_m", 7, "<f4"),
@@ -37,7 +38,7 @@ TOPICS = {"scan": "/radioslam/scan", "tf": "/tf", "tf_static": "/tf_static", "sl
 
 @dataclass(frozen=True)
 class OccupancyImage:
-    """A map_server grid: cells (NX, NY) of the trinary image (0 occupied, 254 free, 205 unknown)."""
+    """A map_server grid: cells (NX, NY) of the trinary image (:mod:`radioslam.io.ros_map`'s pixel values)."""
 
     cells: np.ndarray
     resolution_m: float
@@ -101,8 +102,8 @@ def transform(seconds: float, parent: str, child: str, pose: np.ndarray) -> dict
 def occupancy_grid(grid: OccupancyImage, seconds: float) -> dict:
     """nav_msgs/OccupancyGrid, row-major from the origin's cell (x fastest)."""
     values = np.full(grid.cells.shape, UNKNOWN_CELL, dtype=np.int8)
-    values[grid.cells == 0] = OCCUPIED_CELL
-    values[grid.cells == 254] = FREE_CELL
+    values[grid.cells == OCCUPIED] = OCCUPIED_CELL
+    values[grid.cells == FREE] = FREE_CELL
     nx, ny = grid.cells.shape
     origin = np.array([grid.origin[0], grid.origin[1], 0.0])
     info = {"map_load_time": _time(seconds), "resolution": float(grid.resolution_m), "width": nx, "height": ny,

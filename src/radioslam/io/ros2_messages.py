@@ -39,21 +39,15 @@ _DEFINITIONS = {
     "visualization_msgs/MarkerArray": "Marker[] markers",
 }
 
-_DEPENDENCIES = {
-    "std_msgs/Header": ["builtin_interfaces/Time"],
-    "geometry_msgs/Pose": ["geometry_msgs/Point", "geometry_msgs/Quaternion"],
-    "geometry_msgs/PoseStamped": ["std_msgs/Header", "geometry_msgs/Pose"],
-    "geometry_msgs/Transform": ["geometry_msgs/Vector3", "geometry_msgs/Quaternion"],
-    "geometry_msgs/TransformStamped": ["std_msgs/Header", "geometry_msgs/Transform"],
-    "sensor_msgs/PointCloud2": ["std_msgs/Header", "sensor_msgs/PointField"],
-    "nav_msgs/Path": ["std_msgs/Header", "geometry_msgs/PoseStamped"],
-    "nav_msgs/MapMetaData": ["builtin_interfaces/Time", "geometry_msgs/Pose"],
-    "nav_msgs/OccupancyGrid": ["std_msgs/Header", "nav_msgs/MapMetaData"],
-    "tf2_msgs/TFMessage": ["geometry_msgs/TransformStamped"],
-    "visualization_msgs/Marker": ["std_msgs/Header", "geometry_msgs/Pose", "geometry_msgs/Vector3",
-                                  "std_msgs/ColorRGBA", "builtin_interfaces/Duration", "geometry_msgs/Point"],
-    "visualization_msgs/MarkerArray": ["visualization_msgs/Marker"],
-}
+PRIMITIVES = {"bool", "byte", "char", "float32", "float64", "int8", "uint8", "int16", "uint16", "int32", "uint32",
+              "int64", "uint64", "string", "wstring"}
+
+
+def _field_types(name: str) -> list[str]:
+    """The message types ``name``'s fields use, fully named (a bare type is in ``name``'s package)."""
+    package = name.split("/")[0]
+    types = [line.split()[0].split("[")[0] for line in _DEFINITIONS[name].splitlines()]
+    return [t if "/" in t else f"{package}/{t}" for t in types if t not in PRIMITIVES]
 
 
 def _closure(name: str) -> list[str]:
@@ -61,7 +55,7 @@ def _closure(name: str) -> list[str]:
     seen: list[str] = []
 
     def visit(n: str) -> None:
-        for dep in _DEPENDENCIES.get(n, []):
+        for dep in _field_types(n):
             if dep not in seen:
                 seen.append(dep)
                 visit(dep)
