@@ -46,11 +46,7 @@ def simulate_and_sense(scene_name: str, out: Path, seed: int, snr_db: float | No
             capture = next(captures)
             simulate_s += time.perf_counter() - tick
             tick = time.perf_counter()
-            result = receiver.sense(capture)
-            write_scan(run.scan_file(capture.pose_index), result.scan, comment=f"pose {capture.pose_index}")
-            manifest.record("sense", [run.scan_file(capture.pose_index)])
-            if capture.pose_index == plot_pose:
-                manifest.record("sense", [plot_heatmap(run, capture, result)])
+            write_sensed(run, manifest, capture, receiver.sense(capture), plot_pose)
             sense_s += time.perf_counter() - tick
             progress.advance()
     timings.update(simulate=simulate_s, sense=sense_s)
@@ -97,13 +93,17 @@ def sense_stage(out: Path, sensing: SensingConfig | None = None, calibration: Pa
                                      "one recording per pose", file=f, field="global.radioslam:pose_index")
             seen[capture.pose_index] = f
             receiver = receiver or Receiver(capture.radio, cal.hardware_delay_s, cfg, cal.leakage)
-            result = receiver.sense(capture)
-            write_scan(run.scan_file(capture.pose_index), result.scan, comment=f"pose {capture.pose_index}")
-            manifest.record("sense", [run.scan_file(capture.pose_index)])
-            if capture.pose_index == plot_pose:
-                manifest.record("sense", [plot_heatmap(run, capture, result)])
+            write_sensed(run, manifest, capture, receiver.sense(capture), plot_pose)
             progress.advance()
     return len(files)
+
+
+def write_sensed(run: RunDir, manifest: RunManifest, capture, result, plot_pose: int) -> None:
+    """A pose's scans/NNNN.ply, and its heatmap if it is ``plot_pose``, written and recorded under sense."""
+    write_scan(run.scan_file(capture.pose_index), result.scan, comment=f"pose {capture.pose_index}")
+    manifest.record("sense", [run.scan_file(capture.pose_index)])
+    if capture.pose_index == plot_pose:
+        manifest.record("sense", [plot_heatmap(run, capture, result)])
 
 
 def plot_heatmap(run: RunDir, capture, result) -> Path:
