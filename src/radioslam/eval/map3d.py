@@ -50,14 +50,25 @@ def face_samples(mesh: Mesh, spacing_m: float) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(points), np.concatenate(owners)
 
 
+def face_planes(mesh: Mesh, faces: np.ndarray | slice = slice(None)) -> tuple[np.ndarray, np.ndarray]:
+    """A vertex (F, 3) and the unit normal (F, 3) of each of ``faces`` (default: every face)."""
+    a, b, c = (mesh.vertices[mesh.faces[faces, k]] for k in range(3))
+    normal = np.cross(b - a, c - a)
+    return a, normal / np.linalg.norm(normal, axis=1, keepdims=True)
+
+
+def horizontal_surface_heights(mesh: Mesh) -> np.ndarray:
+    """The heights (m) of the mesh's horizontal faces (floor, ceiling, table tops), each once, to the mm."""
+    a, normal = face_planes(mesh)
+    return np.unique(np.round(a[np.abs(normal[:, 2]) > HORIZONTAL_NZ, 2], 3))
+
+
 def match_surfaces(points: np.ndarray, mesh: Mesh, spacing_m: float = 0.05) -> SurfaceMatch:
     """Each point (P, 3) against the mesh (world frame, z up)."""
     samples, owner = face_samples(mesh, spacing_m)
     _, nearest = cKDTree(samples).query(points)
     face = owner[nearest]
-    a, b, c = (mesh.vertices[mesh.faces[face, k]] for k in range(3))
-    normal = np.cross(b - a, c - a)
-    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    a, normal = face_planes(mesh, face)
     off_plane = np.einsum("pk,pk->p", points - a, normal)
     in_plane = np.linalg.norm((points - off_plane[:, None] * normal) - samples[nearest], axis=1)
     # exact off the face's plane; along it, the distance beyond the nearest sample (within spacing/√2 of exact)

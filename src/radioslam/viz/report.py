@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from radioslam.eval.map3d import HORIZONTAL_NZ
+from radioslam.eval.map3d import horizontal_surface_heights
 from radioslam.eval.metric_table import metric_rows
 from radioslam.io import read_scan, read_tum
 from radioslam.io.atomic import atomic_write_text
@@ -163,12 +163,7 @@ def map_3d_section(run: RunDir, scene, estimate: np.ndarray) -> str:
     if not len(points) or np.ptp(points[:, 2]) == 0:
         return ""
     mesh = scene_mesh(scene)
-    surfaces = np.zeros(0)
-    if mesh is not None:
-        a, b, c = (mesh.vertices[mesh.faces[:, k]] for k in range(3))
-        normal = np.cross(b - a, c - a)
-        flat = np.abs(normal[:, 2]) > HORIZONTAL_NZ * np.linalg.norm(normal, axis=1)
-        surfaces = np.unique(np.round(a[flat, 2], 3))
+    surfaces = np.zeros(0) if mesh is None else horizontal_surface_heights(mesh)
     height, _ = run.terminal_height_m()
     figure = run.root / "map3d.png"
     map_3d_figure(figure, points, estimate, height, surfaces, title=f"{scene.name}: 3D map from the SLAM poses")
