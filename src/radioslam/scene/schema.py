@@ -6,6 +6,7 @@ Unknown keys are rejected everywhere; the optional ``radio:`` block is a
 
 from __future__ import annotations
 
+import math
 from enum import Enum
 from typing import Annotated, Literal
 
@@ -18,7 +19,6 @@ from radioslam.scene.materials import ItuMaterial
 EXTENT_M = 10_000.0
 MAX_SEGMENTS = 20_000  # each pose casts a specular ray per segment against every segment
 MAX_POSES = 100_000
-TWO_PI = 6.283185307179586
 Coordinate = Annotated[float, Field(ge=-EXTENT_M, le=EXTENT_M)]
 Point = tuple[Coordinate, Coordinate]
 
@@ -70,7 +70,7 @@ class TrajectorySpec(_Strict):
     circle: CircleSpec | None = None
     # x, y in metres and the heading θ in radians, counter-clockwise from +x (|θ| ≤ 2π: a degree would pass
     # silently as a wrong heading)
-    poses: list[tuple[Coordinate, Coordinate, Annotated[float, Field(ge=-TWO_PI, le=TWO_PI)]]] | None = \
+    poses: list[tuple[Coordinate, Coordinate, Annotated[float, Field(ge=-math.tau, le=math.tau)]]] | None = \
         Field(None, max_length=MAX_POSES)
 
     @field_validator("poses", mode="before")
@@ -79,9 +79,9 @@ class TrajectorySpec(_Strict):
         if isinstance(v, list):
             for k, pose in enumerate(v):
                 theta = pose[2] if isinstance(pose, (list, tuple)) and len(pose) == 3 else None
-                if isinstance(theta, (int, float)) and abs(theta) > TWO_PI:
+                if isinstance(theta, (int, float)) and abs(theta) > math.tau:
                     raise ValueError(f"pose {k}: θ = {theta:g} is not in radians (|θ| ≤ 2π ≈ 6.283); "
-                                     f"{theta:g}° is {theta * 3.141592653589793 / 180:.4f} rad")
+                                     f"{theta:g}° is {math.radians(theta):.4f} rad")
         return v
 
     @model_validator(mode="after")
