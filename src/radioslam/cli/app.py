@@ -4,13 +4,11 @@ from __future__ import annotations
 
 import typer
 
-from radioslam.cli.options import CONTEXT, QUIET_HELP, VERBOSE_HELP
+from radioslam.cli.options import CONTEXT, quiet_option, verbose_option
 from radioslam.cli.output import set_verbosity
 
 app = typer.Typer(add_completion=False, invoke_without_command=True, pretty_exceptions_enable=False,
-                  rich_markup_mode=None, context_settings=CONTEXT,
-                  help="Active mmWave sensing SLAM in 5G NR (arXiv 2507.04662): simulate a terminal's beam "
-                       "sweeps as waveform IQ, sense them into radio point clouds, map and localize.")
+                  rich_markup_mode=None, context_settings=CONTEXT)  # its help: _root's docstring
 
 
 def _version(value: bool) -> None:
@@ -25,9 +23,8 @@ def _version(value: bool) -> None:
 def _root(ctx: typer.Context,
           version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
                                        help="print the version and exit"),
-          quiet: bool = typer.Option(False, "-q", "--quiet", help=QUIET_HELP),
-          verbose: int = typer.Option(0, "-v", "--verbose", count=True, show_default=False,
-                                      help=VERBOSE_HELP)) -> None:
+          quiet: bool = quiet_option(),
+          verbose: int = verbose_option()) -> None:
     """Active mmWave sensing SLAM in 5G NR (arXiv 2507.04662): simulate a terminal's beam sweeps as waveform IQ,
     sense them into radio point clouds, map and localize."""
     set_verbosity(quiet, verbose)

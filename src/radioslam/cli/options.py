@@ -34,10 +34,9 @@ def register(app: typer.Typer, name: Optional[str] = None) -> Callable[[Callable
 
         signature = inspect.signature(function)
         extra = [inspect.Parameter("quiet", inspect.Parameter.KEYWORD_ONLY, annotation="bool",
-                                   default=typer.Option(False, "-q", "--quiet", help=QUIET_HELP)),
+                                   default=quiet_option()),
                  inspect.Parameter("verbose", inspect.Parameter.KEYWORD_ONLY, annotation="int",
-                                   default=typer.Option(0, "-v", "--verbose", count=True, show_default=False,
-                                                     help=VERBOSE_HELP))]
+                                   default=verbose_option())]
         command.__signature__ = signature.replace(parameters=[*signature.parameters.values(), *extra])
         command.__annotations__ = {**function.__annotations__, "quiet": "bool", "verbose": "int"}
         summary = " ".join(inspect.getdoc(function).split("\n\n")[0].split())  # whole, not cut at a period
@@ -64,6 +63,14 @@ SCENE_FRAME_HELP = ("also write trajectory_scene.tum: the trajectory in the scen
                     "the map frame, the terminal's at the first pose), for 'evo_ape tum ground_truth.tum "
                     "trajectory_scene.tum' without -a; needs ground_truth.tum (a simulated run)")
 PLOT_POSE_HELP = "pose whose radar heatmap and cloud scans/NNNN.png shows (paper Fig. 4(b)); −1: none"
+
+
+def quiet_option():
+    return typer.Option(False, "-q", "--quiet", help=QUIET_HELP)
+
+
+def verbose_option():
+    return typer.Option(0, "-v", "--verbose", count=True, show_default=False, help=VERBOSE_HELP)
 
 
 def scene_argument():
