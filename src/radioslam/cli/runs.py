@@ -89,9 +89,10 @@ def demo(**options) -> None:
 
 
 # demo's options are run's: its signature, without the scene and --odometry, --out defaulting to runs/demo
-demo.__signature__ = inspect.signature(run.__wrapped__).replace(parameters=[
+_run_signature = inspect.signature(run.__wrapped__)
+demo.__signature__ = _run_signature.replace(parameters=[
     p.replace(default=opt.out_option(default=Path("runs/demo"))) if p.name == "out" else p
-    for p in inspect.signature(run.__wrapped__).parameters.values() if p.name not in ("scene", "odometry")])
+    for p in _run_signature.parameters.values() if p.name not in ("scene", "odometry")])
 demo.__annotations__ = {k: v for k, v in run.__wrapped__.__annotations__.items() if k not in ("scene", "odometry")}
 register(app)(demo)
 
