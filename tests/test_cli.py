@@ -1,18 +1,11 @@
 """The command line ★: outputs of simulate, and exit status 2 with one line on bad input."""
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
+from cli_process import cli as run
 
 from radioslam.io import read_capture, read_tum
 from radioslam.scene import load_scene
-
-
-def run(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "radioslam.cli", *args], capture_output=True, text=True,
-                          cwd=cwd, timeout=300)
 
 
 def test_version():

@@ -9,6 +9,7 @@ import sys
 
 import pytest
 import yaml
+from cli_process import cli
 
 COMMANDS = ("simulate", "calibrate", "sense", "slam", "evaluate", "report", "scenes", "run", "demo", "reproduce",
             "sweep", "export")
@@ -18,9 +19,6 @@ ROOM = {"version": 1, "name": "small-room",
         "trajectory": {"circle": {"center": [0.0, 0.0], "radius": 1.0, "poses": 6}}}
 
 
-def cli(*args, env=None, timeout=300):
-    return subprocess.run([sys.executable, "-m", "radioslam.cli", *map(str, args)], capture_output=True, text=True,
-                          timeout=timeout, env={**os.environ, **(env or {})})
 
 
 @pytest.fixture

@@ -8,11 +8,7 @@ import sys
 import time
 
 import pytest
-
-
-def cli(*args, **kwargs):
-    return subprocess.run([sys.executable, "-m", "radioslam.cli", *map(str, args)], capture_output=True, text=True,
-                          timeout=300, **kwargs)
+from cli_process import cli
 
 
 @pytest.mark.parametrize("name", [":thumbs_up:.yaml", "radioslam:radio:[bold]x[/bold].yaml",
