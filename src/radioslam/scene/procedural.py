@@ -38,6 +38,11 @@ class RoomKind(str, Enum):
     ROTATED = "rotated"
     POLYGON = "polygon"
     HALL = "hall"
+    # issue #47 (scene/lookalike.py, scene/offices.py): rooms alike under a turn or a mirror, offices
+    SYMMETRIC_HALF = "symmetric-half"
+    SYMMETRIC_QUARTER = "symmetric-quarter"
+    SYMMETRIC_MIRROR = "symmetric-mirror"
+    OFFICE = "office"
 
 
 class MotionKind(str, Enum):
@@ -48,6 +53,16 @@ class MotionKind(str, Enum):
     UTURN = "uturn"
     LAWNMOWER = "lawnmower"
     RANDOM = "random"
+    # issue #47: smooth curves through look-alike rooms, and a tour of an office's rooms
+    FIGURE_EIGHT = "figure-eight"
+    CLOVER = "clover"
+    TOUR = "tour"
+
+
+# the suite of issue #12 (bench_robustness's original cases, kept as they were)
+CLASSIC_ROOMS = (RoomKind.RECTANGLE, RoomKind.L_SHAPE, RoomKind.ROTATED, RoomKind.POLYGON, RoomKind.HALL)
+CLASSIC_MOTIONS = (MotionKind.SMOOTH, MotionKind.SHARP, MotionKind.SPOT, MotionKind.FIXED, MotionKind.UTURN,
+                   MotionKind.LAWNMOWER, MotionKind.RANDOM)
 
 
 @dataclass(frozen=True)
@@ -256,7 +271,7 @@ def generate_case(room: RoomKind, motion: MotionKind, seed: int, snr_db: float |
 def robustness_suite(runs: int = 40, seed: int = 0) -> list[Case]:
     """``runs`` cases cycling through every motion and room kind (rooms shifted per lap, so each
     motion meets each room), seeds derived from ``seed``."""
-    rooms, motions = list(RoomKind), list(MotionKind)
+    rooms, motions = CLASSIC_ROOMS, CLASSIC_MOTIONS
     cases = []
     for i in range(runs):
         motion = motions[i % len(motions)]
