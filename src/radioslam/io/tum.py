@@ -11,7 +11,8 @@ from radioslam.io.errors import TumError
 
 
 def write_tum(path: str | Path, timestamps: np.ndarray, poses: np.ndarray) -> None:
-    """Write SE(2) poses (P, 3) as a TUM file (atomically)."""
+    """Write SE(2) poses (P, 3) as a TUM file (atomically); NaN x and y write ``nan`` (a gyro's
+    odometry: its turns measured, its translation unknown)."""
     poses = np.asarray(poses, dtype=np.float64)
     half = poses[:, 2] / 2.0
     zeros = np.zeros(len(poses))
@@ -21,8 +22,9 @@ def write_tum(path: str | Path, timestamps: np.ndarray, poses: np.ndarray) -> No
     atomic_write_text(path, "# timestamp x y z qx qy qz qw\n" + lines + "\n")
 
 
-def read_tum(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """Read a TUM file: timestamps (P,) and SE(2) poses (P, 3), yaw from the quaternion."""
+def read_tum(path: str | Path, unknown_translation: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Read a TUM file: timestamps (P,) and SE(2) poses (P, 3), yaw from the quaternion. With
+    ``unknown_translation`` a file whose x and y are ``nan`` on every line (a gyro's odometry) is read too."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -39,12 +41,53 @@ def read_tum(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
             values = [float(v) for v in fields]
         except ValueError:
             raise TumError("not a number", file=path, field=f"line {number}") from None
-        if not np.all(np.isfinite(values)):
+        known = values[:1] + values[3:] if unknown_translation else values
+        if not np.all(np.isfinite(known)) or np.any(np.isinf(values)):
             raise TumError("NaN or infinite value", file=path, field=f"line {number}")
         rows.append(values)
     if not rows:
         raise TumError("no poses", file=path, field="(file)")
     data = np.array(rows)
+    if unknown_translation and np.isnan(data[:, 1:3]).any() and not np.isnan(data[:, 1:3]).all():
+        raise TumError("x and y must be nan on every line (a gyro's odometry) or on none", file=path, field="x, y")
     qx, qy, qz, qw = data[:, 4:8].T
     yaw = np.arctan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy**2 + qz**2))
     return data[:, 0], np.column_stack([data[:, 1], data[:, 2], yaw])
+
+
+def read_angular_rate(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """An IMU's angular rate about z: a CSV of ``timestamp,wz`` (s, rad/s) per line, ``#`` comments and a
+    header line of names allowed. Returns timestamps (N,) increasing and rates (N,)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise TumError("no such file", file=path, field="(file)") from None
+    rows = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        fields = [f.strip() for f in line.split(",")]
+        if not line.strip() or line.lstrip().startswith("#") or (not rows and fields[0].lower() == "timestamp"):
+            continue
+        if len(fields) != 2:
+            raise TumError(f"expected 2 numbers (timestamp, wz), got {len(fields)}", file=path, field=f"line {number}")
+        try:
+            values = [float(v) for v in fields]
+        except ValueError:
+            raise TumError("not a number", file=path, field=f"line {number}") from None
+        if not np.all(np.isfinite(values)):
+            raise TumError("NaN or infinite value", file=path, field=f"line {number}")
+        rows.append(values)
+    if len(rows) < 2:
+        raise TumError("fewer than 2 samples", file=path, field="(file)")
+    data = np.array(rows)
+    if np.any(np.diff(data[:, 0]) <= 0):
+        raise TumError("timestamps must increase", file=path, field="timestamp")
+    return data[:, 0], data[:, 1]
+
+
+def headings_at(timestamps: np.ndarray, rate_times: np.ndarray, rates: np.ndarray) -> np.ndarray:
+    """The heading (P,) at each of ``timestamps``: the angular rate integrated by the trapezoid rule from the
+    first timestamp (heading 0 there), linearly interpolated between samples."""
+    turned = np.concatenate([[0.0], np.cumsum(0.5 * (rates[1:] + rates[:-1]) * np.diff(rate_times))])
+    heading = np.interp(timestamps, rate_times, turned)
+    return heading - heading[0]

@@ -13,6 +13,7 @@ from radioslam.io import read_scan, read_tum, write_scan, write_tum
 from radioslam.io.manifest import RunManifest
 from radioslam.io.ros_map import write_ros_map
 from radioslam.io.rundir import RunDir
+from radioslam.io.tum import headings_at, read_angular_rate
 from radioslam.pipeline.simulate import write_json
 from radioslam.progress import SILENT, Progress
 from radioslam.sensing.pointcloud import Scan
@@ -115,8 +116,19 @@ def write_slam_outputs(run: RunDir, scans: list[Scan], result: SlamResult, cfg: 
 
 
 def read_odometry(path: Path, scans: int) -> np.ndarray:
-    """External odometry poses (P, 3) from a TUM file, one per scan in pose order."""
-    _, poses = read_tum(path)
+    """External odometry poses (P, 3), one per scan in pose order: a TUM file (x and y ``nan`` on every line:
+    a gyro, its turns alone measured), or an IMU's angular rate (``.csv``: timestamp, wz) integrated to the
+    scans' timestamps (then x and y are NaN)."""
+    path = Path(path)
+    if path.suffix.lower() == ".csv":
+        times, rates = read_angular_rate(path)
+        stamps = RunDir.pose_timestamps(scans)
+        if stamps[0] < times[0] or stamps[-1] > times[-1]:
+            raise RadioslamError(f"the rates span {times[0]:g}–{times[-1]:g} s, the scans {stamps[0]:g}–"
+                                 f"{stamps[-1]:g} s", file=path, field="timestamp")
+        heading = headings_at(stamps, times, rates)
+        return np.column_stack([np.full(scans, np.nan), np.full(scans, np.nan), heading])
+    _, poses = read_tum(path, unknown_translation=True)
     if len(poses) != scans:
         raise RadioslamError(f"{len(poses)} odometry poses for {scans} scans (one per scan)", file=path,
                              field="(poses)")

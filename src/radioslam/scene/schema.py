@@ -96,12 +96,15 @@ class TrajectorySpec(_Strict):
 class OdometrySpec(_Strict):
     """A drifting wheel/IMU odometry the simulator writes as ``odometry.tum`` (issue #12): each
     step's true motion, scaled by 1 + ``scale_bias``, its heading change plus ``heading_bias_deg``,
-    and white noise of ``sigma_m`` (each axis of the step, terminal frame) and ``sigma_deg``."""
+    and white noise of ``sigma_m`` (each axis of the step, terminal frame) and ``sigma_deg``. With
+    ``gyro_only`` only the headings are written (x and y ``nan``): a gyro's integrated turns."""
 
     sigma_m: float = Field(0.02, ge=0.0, le=10.0)
     sigma_deg: float = Field(0.5, ge=0.0, le=180.0)
     scale_bias: float = Field(0.0, ge=-0.5, le=0.5)
     heading_bias_deg: float = Field(0.0, ge=-30.0, le=30.0)
+    # a gyro (a phone's IMU): only the turns are measured; odometry.tum's x and y are nan (issue #47)
+    gyro_only: bool = False
 
 
 class ExtrudeSpec(_Strict):

@@ -33,4 +33,6 @@ def simulated_odometry(poses: np.ndarray, spec: OdometrySpec, rng: np.random.Gen
     ch, sh = np.cos(heading[:-1]), np.sin(heading[:-1])
     moves = np.column_stack([ch * measured[:, 0] - sh * measured[:, 1], sh * measured[:, 0] + ch * measured[:, 1]])
     xy = poses[0, :2] + np.concatenate([np.zeros((1, 2)), np.cumsum(moves, axis=0)])
+    if spec.gyro_only:  # the turns alone: a gyro knows nothing of the translation
+        xy = np.full_like(xy, np.nan)
     return np.column_stack([xy, np.angle(np.exp(1j * heading))])

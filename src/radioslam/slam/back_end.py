@@ -30,6 +30,8 @@ class BackEnd:
         self.graph = PoseGraph(prior_sigmas=np.array([cfg.prior_sigma_m, cfg.prior_sigma_m,
                                                       np.radians(cfg.prior_sigma_deg)]))
         self.odometry_noise = pose_covariance(motion.odometry_sigma_m, motion.odometry_sigma_deg)
+        # a gyro's step: its turn at the odometry's heading noise, its translation unmeasured (a kilometre)
+        self.gyro_noise = pose_covariance(1e3, motion.odometry_sigma_deg)
         self.jump_covariance = jump_covariance(motion)  # a step the front end did not see (a kidnap, a branch left)
         self.step_factor: dict[int, int] = {}  # the front-end between factor into each pose
         self.estimates: dict[int, np.ndarray] = {}  # the latest solution, every pose so far
@@ -55,7 +57,9 @@ class BackEnd:
             relative = between(previous, step.pose)
             self.step_covariance[k] = local_covariance(step.covariance, previous[2])
             self.step_factor[k] = self.graph.add_odometry(k - 1, k, relative, self.step_covariance[k])
-            if odometry_step is not None:
+            if odometry_step is not None and np.isnan(odometry_step[:2]).any():  # a gyro: the turn alone
+                self.graph.add_odometry(k - 1, k, np.array([0.0, 0.0, odometry_step[2]]), self.gyro_noise)
+            elif odometry_step is not None:
                 self.graph.add_odometry(k - 1, k, odometry_step, self.odometry_noise)
             self.chain[k] = compose(self.chain[k - 1], relative)
         self.estimates[k] = step.pose

@@ -12,6 +12,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from radioslam.config_file import load_section
 from radioslam.slam.errors import SlamError
+from radioslam.slam.motion_prior import Platform
 
 
 class _Section(BaseModel):
@@ -83,7 +84,10 @@ class FrontEndConfig(_Section):
     # and, once a step is predicted, by this fraction times its distance from the predicted position
     # per max_step_m (capped at 1)
     translation_prior: float = Field(0.2, ge=0, lt=1)
-    # two distinct candidates whose discounted scores differ by less than this fraction are ambiguous
+    # a candidate whose posterior odds against the chosen one are better than 1 : rival_odds is its rival:
+    # the scan is ambiguous (a probability ratio: 20 is the 5 % a rival keeps at least)
+    rival_odds: float = Field(20.0, gt=1)
+    # the search keeps candidates whose discounted scores lie within this fraction of the best
     ambiguity_margin: float = Field(0.08, ge=0, lt=1)
     # branch and bound scores on the 5 cm lattice, where a point may sit a cell from its wall (a
     # loss of up to e^(-1/2) per point): it keeps candidates this much further below the best, and up
@@ -108,7 +112,11 @@ class FrontEndConfig(_Section):
 
 
 class MotionConfig(_Section):
-    """The motion model (:mod:`radioslam.slam.motion`): hypotheses, not a window centre."""
+    """The motion model (:mod:`radioslam.slam.motion`) and its prior (:mod:`radioslam.slam.motion_prior`)."""
+
+    # what carries the terminal: the widths of a step about the motion's hypotheses and the share of the
+    # unexpected (motion_prior.PLATFORMS)
+    platform: Platform = Platform.UNKNOWN
 
     # the translation search covers this far from the last pose whatever the turn (steps up to 1 m)
     max_step_m: float = Field(1.3, gt=0, le=20.0)

@@ -41,3 +41,15 @@ def free_samples(xy: np.ndarray, normals: np.ndarray, stop: float, pose_radius: 
     along = start + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)) * spacing
     samples.append(np.stack([along * np.cos(phi[line]), along * np.sin(phi[line])], axis=1))
     return np.concatenate(samples)
+
+
+def seen_samples(xy: np.ndarray, spacing: float) -> np.ndarray:
+    """Terminal-frame samples (S, 2) of the space one scan observed: along each point's ray from the
+    terminal to its echo, ``spacing`` apart (the space its beams swept up to what they saw). Coarse by
+    design: it tells space the map has observed from space it never saw (:mod:`radioslam.slam.measurement`),
+    not where the surfaces are."""
+    reach = np.linalg.norm(xy, axis=1)
+    count = np.ceil(reach / spacing).astype(np.int64)
+    ray = np.repeat(np.arange(len(xy)), count)
+    along = (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)) * spacing
+    return xy[ray] * (along / np.maximum(reach[ray], 1e-12))[:, None]

@@ -32,6 +32,7 @@ from radioslam.slam.errors import SlamError
 
 # a point farther than 3σ from the map counts as this likely (log-likelihood floor)
 LIKELIHOOD_FLOOR = float(np.exp(-4.5))
+SEEN_CELLS = 4  # the observed space is marked on cells this many grid cells wide (0.2 m at 5 cm)
 
 
 def phasors(angles: np.ndarray) -> np.ndarray:
@@ -60,6 +61,11 @@ class LikelihoodGrid:
     normal_sigma: float
     plane: np.ndarray | None = None  # (NX, NY) point-to-plane field; None: as ``values``
     phasor: np.ndarray | None = None  # (NX, NY) e^{iψ} of ``normals``, 0 where unknown; None: computed
+    # (NX, NY) the cells the map observed (its scans' beams swept them); None: all of them
+    seen: np.ndarray | None = None
+    # the likelihood a point gets where the map never looked: the field's mean over the cells it observed,
+    # the prior of a surface there (the likelihood field marginalized over a map it does not know)
+    neutral: float = 0.0
 
     @property
     def plane_values(self) -> np.ndarray:
@@ -74,11 +80,13 @@ class LikelihoodGrid:
     def from_points(cls, points: np.ndarray, resolution: float, sigma: float, margin: float,
                     normals: np.ndarray | None = None, normal_sigma: float = np.inf,
                     plane_reach: float = 0.0, free: np.ndarray | None = None,
-                    free_penalty: float = 0.0) -> "LikelihoodGrid":
+                    free_penalty: float = 0.0, seen: np.ndarray | None = None) -> "LikelihoodGrid":
         """The field of map points (P, 2) with their world normals (P,), ``margin`` beyond them (and
         beyond the free samples; :func:`field_reach` is as far as the field reaches);
         cells holding a ``free`` sample (F, 2) (:mod:`radioslam.slam.free_space`) and farther than
-        3σ from every map point score −``free_penalty``: a point there contradicts the map.
+        3σ from every map point score −``free_penalty``: a point there contradicts the map. ``seen`` (S, 2):
+        samples of the space the map's scans observed (:func:`radioslam.slam.free_space.seen_samples`),
+        ``SEEN_CELLS`` cells apart at most, which mark it (None: all of it).
         Whole-grid array operations throughout (float32 fields: the scores need no more)."""
         if len(points) == 0:
             raise SlamError("cannot build a likelihood grid from no points", field="points")
@@ -131,7 +139,10 @@ class LikelihoodGrid:
         fields = fields.reshape(2, *shape)
         fields[:, [0, -1], :] = 0.0  # lookups beyond the grid clip to its border: keep it empty
         fields[:, :, [0, -1]] = 0.0
-        grid = cls(fields[0], origin, resolution, normal.reshape(shape), normal_sigma, fields[1], phasor.reshape(shape))
+        observed = None if seen is None else _observed(seen, origin, resolution, shape)
+        neutral = 0.0 if observed is None or not observed.any() else float(np.maximum(fields[0][observed], 0).mean())
+        grid = cls(fields[0], origin, resolution, normal.reshape(shape), normal_sigma, fields[1], phasor.reshape(shape),
+                   observed, neutral)
         grid.__dict__["fields"] = fields  # the cached stack, already built
         return grid
 
@@ -211,6 +222,19 @@ class LikelihoodGrid:
         for h in range(1, levels + 1):
             levels_out.append(_pool_twice(levels_out[-1], 2 ** (h - 1)))
         return levels_out[:1] + levels_out[2:]
+
+
+def _observed(seen: np.ndarray, origin: np.ndarray, resolution: float, shape: tuple[int, int]) -> np.ndarray:
+    """(NX, NY) the cells within a coarse cell (``SEEN_CELLS`` wide) of a ``seen`` sample, or beside one."""
+    coarse_shape = (-(-shape[0] // SEEN_CELLS), -(-shape[1] // SEEN_CELLS))
+    c = np.floor((seen - origin) / (resolution * SEEN_CELLS)).astype(np.intp)
+    inside = (c[:, 0] >= 0) & (c[:, 0] < coarse_shape[0]) & (c[:, 1] >= 0) & (c[:, 1] < coarse_shape[1])
+    coarse = np.zeros(coarse_shape, dtype=bool)
+    coarse[c[inside, 0], c[inside, 1]] = True
+    padded = np.pad(coarse, 1)  # and its 8 neighbours: samples that far apart leave no hole
+    coarse = np.any([padded[1 + i:1 + i + coarse_shape[0], 1 + j:1 + j + coarse_shape[1]]
+                     for i in (-1, 0, 1) for j in (-1, 0, 1)], axis=0)
+    return np.repeat(np.repeat(coarse, SEEN_CELLS, axis=0), SEEN_CELLS, axis=1)[:shape[0], :shape[1]]
 
 
 def field_reach(sigma: float, resolution: float, plane_reach: float = 0.0) -> float:

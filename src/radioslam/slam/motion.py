@@ -20,7 +20,8 @@ from enum import Enum
 import numpy as np
 
 from radioslam.slam.config import MotionConfig
-from radioslam.slam.se2 import between, compose, pose_covariance
+from radioslam.slam.motion_prior import PLATFORMS, MotionPrior, Platform, PlatformModel
+from radioslam.slam.se2 import between, compose, pose_covariance, wrap_angle
 
 
 class MotionHypothesis(str, Enum):
@@ -38,25 +39,55 @@ class Hypothesis:
 
 @dataclass
 class MotionModel:
-    """Built from the ``motion`` config section; ``odometry`` (P, 3) are external odometry poses
-    in their own frame (their steps are what counts), or None."""
+    """Built from the ``motion`` config section (:meth:`from_config`); ``odometry`` (P, 3) are external
+    odometry poses in their own frame (their steps are what counts), or None; a gyro's odometry has NaN
+    positions (its turns alone are measured)."""
 
     pace_scans: int
     straight_rad: float
     odometry: np.ndarray | None = None
     velocity: np.ndarray | None = None  # the last step, None before two poses or after a jump
     speeds: list[float] = field(default_factory=list)  # lengths of observed straight steps
+    platform: PlatformModel = PLATFORMS[Platform.UNKNOWN]
+    max_step_m: float = 1.3
+    odometry_sigmas: np.ndarray = field(default_factory=lambda: np.array([0.05, 0.05, np.radians(2.0)]))
+
+    @classmethod
+    def from_config(cls, cfg: MotionConfig, odometry: np.ndarray | None = None) -> "MotionModel":
+        sigmas = np.array([cfg.odometry_sigma_m, cfg.odometry_sigma_m, np.radians(cfg.odometry_sigma_deg)])
+        return cls(cfg.pace_scans, np.radians(cfg.straight_deg), odometry, platform=PLATFORMS[cfg.platform],
+                   max_step_m=cfg.max_step_m, odometry_sigmas=sigmas)
+
+    @property
+    def gyro_only(self) -> bool:
+        """The odometry measures turns only (its positions are NaN)."""
+        return self.odometry is not None and bool(np.isnan(self.odometry[:, :2]).all())
 
     def odometry_step(self, k: int) -> np.ndarray | None:
-        """The external odometry's step from pose k − 1 to k, or None."""
+        """The external odometry's step from pose k − 1 to k (x, y NaN for a gyro), or None."""
         if self.odometry is None or k < 1 or k >= len(self.odometry):
             return None
+        if self.gyro_only:
+            return np.array([np.nan, np.nan, wrap_angle(self.odometry[k, 2] - self.odometry[k - 1, 2])])
         return between(self.odometry[k - 1], self.odometry[k])
+
+    def prior(self, k: int, last: np.ndarray) -> MotionPrior:
+        """The motion prior of step k (:mod:`radioslam.slam.motion_prior`): around the odometry's step at its
+        noise, or around every hypothesis at the platform's widths (a gyro's turn at its noise)."""
+        steps = np.array([between(last, h.pose) for h in self.hypotheses(k, last)])
+        step = self.odometry_step(k)
+        if step is not None and not self.gyro_only:
+            return MotionPrior.of(steps, self.platform, self.max_step_m, self.odometry_sigmas)
+        gyro = None if step is None else (float(step[2]), float(self.odometry_sigmas[2]))
+        return MotionPrior.of(steps, self.platform, self.max_step_m, gyro=gyro)
 
     def hypotheses(self, k: int, last: np.ndarray) -> list[Hypothesis]:
         """Where pose k may be, given pose k − 1 at ``last``; the primary hypothesis first."""
         out = []
         step = self.odometry_step(k)
+        if step is not None and self.gyro_only:  # the gyro's turn, standing: the primary where the scans fail
+            step = np.array([0.0, 0.0, step[2]]) if self.velocity is None else \
+                np.array([self.velocity[0], self.velocity[1], step[2]])
         if step is not None:
             out.append(Hypothesis(MotionHypothesis.ODOMETRY, compose(last, step)))
         if self.velocity is not None:

@@ -26,6 +26,29 @@ def specular_normals(scan: Scan, arc_range_m: float, seam_gap_rad: float) -> np.
     return specular_arcs(scan, arc_range_m, seam_gap_rad)[0]
 
 
+def arc_runs(scan: Scan, arc_range_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The scan's arcs: runs of consecutive beams on one orientation at one range (within ``arc_range_m``),
+    one echo seen through adjacent beams. Returns the order (P,) that sorts the points by orientation and
+    beam, each sorted point's arc (P,), and each arc's start and end (A,) in that order."""
+    order = np.lexsort((scan.beam, scan.orientation))
+    beam, orient, rng = scan.beam[order], scan.orientation[order], scan.range_m[order]
+    breaks = (np.diff(beam) != 1) | (np.diff(orient) != 0) | (np.abs(np.diff(rng)) > arc_range_m)
+    arc = np.concatenate([[0], np.cumsum(breaks)]) if len(scan) else np.zeros(0, dtype=np.intp)
+    start = np.flatnonzero(np.concatenate([[True], breaks])) if len(scan) else np.zeros(0, dtype=np.intp)
+    end = np.concatenate([start[1:], [len(arc)]])
+    return order, arc, start, end
+
+
+def echo_weights(scan: Scan, arc_range_m: float) -> np.ndarray:
+    """Each point's share (P,) of one independent observation: 1/n for the n points of an arc (the beams
+    that see one echo of one surface through their overlapping main lobes and sidelobes, their ranges one
+    measurement), 1 for a point alone."""
+    order, arc, start, end = arc_runs(scan, arc_range_m)
+    weights = np.empty(len(scan))
+    weights[order] = 1.0 / (end - start)[arc]
+    return weights
+
+
 def specular_arcs(scan: Scan, arc_range_m: float, seam_gap_rad: float) -> tuple[np.ndarray, np.ndarray]:
     """The normals of :func:`specular_normals` (P,), and each specular arc's sighting of its
     surface (A, 2): the normal's terminal-frame bearing φ and the range of the arc's strongest
@@ -41,16 +64,11 @@ def specular_arcs(scan: Scan, arc_range_m: float, seam_gap_rad: float) -> tuple[
     normals = np.full(len(scan), np.nan)
     if len(scan) < 3:
         return normals, np.zeros((0, 2))
-    order = np.lexsort((scan.beam, scan.orientation))
-    beam, orient = scan.beam[order], scan.orientation[order]
+    order, arc, start, end = arc_runs(scan, arc_range_m)
+    orient = scan.orientation[order]
     rng, power, absolute = scan.range_m[order], scan.power_db[order], wrap_angle(scan.angle_rad[order])
     boresight = orient * (np.pi / 2)
     angle = wrap_angle(absolute - boresight)  # off this orientation's boresight: no ±π seam
-    # arcs: runs of consecutive beams on one orientation at one range
-    breaks = (np.diff(beam) != 1) | (np.diff(orient) != 0) | (np.abs(np.diff(rng)) > arc_range_m)
-    arc = np.concatenate([[0], np.cumsum(breaks)])
-    start = np.flatnonzero(np.concatenate([[True], breaks]))
-    end = np.concatenate([start[1:], [len(arc)]])
     # the strongest point of each arc and whether it has a neighbour on both sides
     strongest = np.flatnonzero(power == np.maximum.reduceat(power, start)[arc])
     peak = strongest[np.unique(arc[strongest], return_index=True)[1]]

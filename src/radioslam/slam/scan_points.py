@@ -11,9 +11,11 @@ import numpy as np
 
 from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.config import GridConfig, ScanConfig
-from radioslam.slam.free_space import free_samples
-from radioslam.slam.normals import specular_arcs, wall_points
+from radioslam.slam.free_space import free_samples, seen_samples
+from radioslam.slam.normals import echo_weights, specular_arcs, wall_points
 from radioslam.slam.se2 import between, transform_points
+
+SEEN_SPACING_M = 0.2  # the observed space's samples: a beam is ~13° wide, 0.2 m across at 1 m
 
 
 @dataclass(frozen=True)
@@ -22,6 +24,13 @@ class ScanPoints:
     normals: np.ndarray  # (P,) NaN: no normal known
     free: np.ndarray  # (F, 2) terminal-frame samples of the space the scan saw through
     sightings: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (A, 2) bearing, range of each arc's wall
+    weights: np.ndarray | None = None  # (P,) each point's share of one independent observation; None: 1 each
+    seen: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (S, 2) samples of the space it observed
+
+    @cached_property
+    def observation_weights(self) -> np.ndarray:
+        """(P,) what each point counts for in a log-likelihood (:mod:`radioslam.slam.measurement`)."""
+        return np.ones(len(self.xy)) if self.weights is None else self.weights
 
     def __len__(self) -> int:
         return len(self.xy)
@@ -39,7 +48,8 @@ def prepare_points(scan: Scan, cfg: ScanConfig, grid: GridConfig) -> ScanPoints:
     phi, sightings = specular_arcs(scan, cfg.arc_range_m, np.radians(cfg.seam_gap_deg))
     xy = wall_points(scan, phi) if cfg.project_arcs else scan.xy
     return ScanPoints(xy, phi, free_samples(xy, phi, grid.free_stop_m, grid.free_pose_radius_m,
-                                            grid.resolution_m / 2), sightings)
+                                            grid.resolution_m / 2), sightings, echo_weights(scan, cfg.arc_range_m),
+                      seen_samples(xy, SEEN_SPACING_M))
 
 
 def fused_points(keys: list[int], poses: dict[int, np.ndarray], scans: dict[int, ScanPoints],
@@ -53,4 +63,13 @@ def fused_points(keys: list[int], poses: dict[int, np.ndarray], scans: dict[int,
 
 def fused_free(keys: list[int], poses: dict[int, np.ndarray], scans: dict[int, ScanPoints]) -> np.ndarray:
     """The scans' free-space samples (F, 2) in the world frame."""
-    return np.concatenate([transform_points(poses[k], scans[k].free) for k in keys])
+    return _in_world(keys, poses, [scans[k].free for k in keys])
+
+
+def fused_seen(keys: list[int], poses: dict[int, np.ndarray], scans: dict[int, ScanPoints]) -> np.ndarray:
+    """(S, 2) world samples of the space the scans observed, at ``poses``."""
+    return _in_world(keys, poses, [scans[k].seen for k in keys])
+
+
+def _in_world(keys: list[int], poses: dict[int, np.ndarray], samples: list[np.ndarray]) -> np.ndarray:
+    return np.concatenate([transform_points(poses[k], a) for k, a in zip(keys, samples)] or [np.zeros((0, 2))])

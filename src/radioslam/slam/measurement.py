@@ -1,0 +1,51 @@
+"""The measurement model (issue #47): the log-likelihood of a scan at a pose given a map, one number that
+the front end's candidates compare as a likelihood ratio (Olson 2009 §III's correlative
+log-likelihood, with the radio scan's correlations counted).
+
+Each point's term is the likelihood field's value L at the point (:mod:`radioslam.slam.grid`: a Gaussian
+of its distance to the nearest mapped surface, point-to-plane along a specular normal, times the normals'
+agreement), floored at ``LIKELIHOOD_FLOOR`` (a point 3σ or more from every mapped surface: unexplained, a
+surface the map does not hold), and twice the floor's log on space the map saw through (contradicted:
+a wall where the map's echoes passed). Where the map never looked (no beam of its scans swept the cell)
+a point is neither explained nor contradicted: it scores the prior likelihood of a surface there, the
+field's mean over the space the map did observe (the likelihood field marginalized over an unknown map;
+``LikelihoodGrid.neutral``), or the floor if that is higher. An exploring pose, whose new walls lie where
+the map never looked, then no longer loses to a twin that lays them over mapped walls for that alone.
+
+The points of one specular arc are one echo of one surface seen through adjacent beams (their ranges
+are one measurement, their bearings the beams' pointing): counted as independent they would be
+over-confident by the arc's length, so each point weighs 1/n of its arc's n
+(:func:`radioslam.slam.normals.echo_weights`): the scan's evidence is that of its independent echoes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from radioslam.slam.grid import LIKELIHOOD_FLOOR, LikelihoodGrid
+from radioslam.slam.refine import fit_terms
+
+LOG_FLOOR = float(np.log(LIKELIHOOD_FLOOR))
+
+
+def point_log_likelihoods(values: np.ndarray, unseen: np.ndarray | bool = False, neutral: float = 0.0) -> np.ndarray:
+    """Per point (any shape): log max(L, floor), or log max(L, neutral) where the map never looked
+    (``unseen``), and 2·log floor where L < 0 (space the map saw through)."""
+    floor = np.where(unseen, max(neutral, LIKELIHOOD_FLOOR), LIKELIHOOD_FLOOR)
+    return np.where(values < 0, 2 * LOG_FLOOR, np.log(np.maximum(values, floor)))
+
+
+def scan_log_likelihoods(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, weights: np.ndarray,
+                         poses: np.ndarray) -> np.ndarray:
+    """log p(scan | pose, map) (C,) at each of ``poses`` (C, 3), up to a constant shared by every pose:
+    the weighted sum of the points' terms on the interpolated field."""
+    poses = np.atleast_2d(np.asarray(poses, dtype=np.float64))
+    residual, _ = fit_terms(grid, points, normals, poses)
+    unseen = False
+    if grid.seen is not None:
+        c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
+        world = np.stack([c * points[:, 0] - s * points[:, 1] + poses[:, 0:1],
+                          s * points[:, 0] + c * points[:, 1] + poses[:, 1:2]], axis=-1)
+        cells = grid.cells(world)
+        unseen = ~grid.seen[cells[..., 0], cells[..., 1]]
+    return point_log_likelihoods(1.0 - residual, unseen, grid.neutral) @ weights
