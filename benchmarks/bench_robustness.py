@@ -100,6 +100,7 @@ def run_case(case: BenchCase, cache: Path, peers: bool = True, perturb_m: float 
             "success": case.succeeded(ate, odometry_ate), "loops": len(result.loop_closures),
             "far_loops": far_loops, "tracking_lost": bool(result.tracking_lost),
             "ambiguous_trajectory": bool(getattr(result, "ambiguous_trajectory", False)),
+            "source": getattr(result, "source", "pose graph"),
             "ms_per_scan": float(np.median(ms)), "slowest_tenth_ratio": float(max(tenths) / tenths[0]),
             "seconds": seconds, "status": result.status_counts(),
             "peers": peer_front_ends(scans, truth) if peers else {"kiss-icp": "skipped", "small-gicp": "skipped"}}

@@ -56,7 +56,8 @@ CHANNEL_HELP = ("where the echo paths come from: the built-in 2D caster, or Sion
 ODOMETRY_HELP = ("relative motion from wheels or an IMU, one TUM pose per scan (its noise: slam.motion in "
                  "--config)")
 STRICT_HELP = ("exit with status 3 when tracking was lost (a stretch of scans matched nothing, or a long "
-               "one in which none fixed one pose: a direction nothing fixes, rival poses alike)")
+               "one in which none fixed one pose: a direction nothing fixes, rival poses alike), or when another "
+               "trajectory is within odds of 1 : 20 of the answer (ambiguous_trajectory)")
 JSON_HELP = "print one JSON object of the metrics on stdout"
 SAVE_IQ_HELP = "write SigMF captures/NNNN.sigmf-{meta,data} (28 MB a pose) and sense them from the files"
 SCENE_FRAME_HELP = ("also write trajectory_scene.tum: the trajectory in the scene's frame (trajectory.tum is in "

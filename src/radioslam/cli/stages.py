@@ -16,7 +16,7 @@ from radioslam.cli.options import register
 from radioslam.cli.output import detail, err, gib, info, out_path, progress, warn
 from radioslam.errors import RadioslamError
 
-TRACKING_LOST = 3  # exit status of --strict when tracking was lost
+TRACKING_LOST = 3  # exit status of --strict when tracking was lost or the trajectory is ambiguous
 
 
 @register(app)
@@ -127,11 +127,13 @@ def sense(
 
 
 def report_slam(result, strict: bool) -> None:
-    """The SLAM's summary lines as warnings; with --strict, tracking lost ends in exit status 3."""
+    """The SLAM's summary lines as warnings; with --strict, tracking lost or an ambiguous trajectory ends in
+    exit status 3."""
     for line in result.summary_lines():
         warn(line)
-    if strict and result.tracking_lost:
-        err.print("radioslam: error: tracking lost (--strict)", markup=False)
+    if strict and (result.tracking_lost or result.ambiguous_trajectory):
+        why = "tracking lost" if result.tracking_lost else "ambiguous trajectory"
+        err.print(f"radioslam: error: {why} (--strict)", markup=False)
         raise typer.Exit(TRACKING_LOST)
 
 

@@ -49,8 +49,8 @@ _CAPTURES, _SCANS = r"captures/\d{4,}\.sigmf-(meta|data)", r"scans/\d{4,}\.ply"
 STAGE_FILES: dict[str, tuple[str, ...]] = {
     "simulate": (*_SIMULATED, _CAPTURES),
     "sense": (_SCANS, r"scans/\d{4,}\.png"),
-    "slam": (r"trajectory\.tum", r"trajectory_odometry\.tum", r"trajectory_scene\.tum", r"map\.pgm", r"map\.yaml",
-             r"map\.ply", r"slam\.json"),
+    "slam": (r"trajectory\.tum", r"trajectory_odometry\.tum", r"trajectory_scene\.tum", r"trajectory_alternative\.tum",
+             r"map\.pgm", r"map\.yaml", r"map\.ply", r"slam\.json"),
     "evaluate": (r"metrics\.json",),
     "report": (r"report\.html", r"fig6\.png", r"scan_status\.png", r"map3d\.png"),
 }

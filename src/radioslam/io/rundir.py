@@ -59,6 +59,11 @@ class RunDir:
         return self.root / "trajectory_odometry.tum"
 
     @property
+    def trajectory_alternative(self) -> Path:
+        """The runner-up trajectory, when its odds are within the stated ones (``ambiguous_trajectory``)."""
+        return self.root / "trajectory_alternative.tum"
+
+    @property
     def trajectory_scene(self) -> Path:
         """The SLAM trajectory in the scene's frame (slam --scene-frame, a simulated run's)."""
         return self.root / "trajectory_scene.tum"

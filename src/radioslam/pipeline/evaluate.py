@@ -58,6 +58,7 @@ def _evaluate(run: RunDir) -> dict:
         "poses": len(truth),
         "points_per_scan": float(np.mean(counts)) if counts else 0.0,
         "tracking_lost": bool(summary.get("tracking_lost", False)),
+        "ambiguous_trajectory": bool(summary.get("ambiguous_trajectory", False)),
         "status_counts": summary.get("status_counts", {}),
         "lost_scans": summary.get("lost_scans", []),
         "slam_ms_per_scan": summary.get("slam_ms_per_scan_median"),

@@ -78,6 +78,8 @@ def write_slam_outputs(run: RunDir, scans: list[Scan], result: SlamResult, cfg: 
     stamps = run.pose_timestamps(len(scans))
     write_tum(run.trajectory, stamps, result.poses)
     write_tum(run.trajectory_odometry, stamps, result.odometry)
+    if result.alternative is not None:  # the runner-up within the stated odds (ambiguous_trajectory)
+        write_tum(run.trajectory_alternative, stamps, result.alternative)
     kept = [k for k, status in enumerate(result.status) if status is not ScanStatus.SKIPPED]
     clouds, scans = scans, [scan.horizontal() for scan in scans]  # 3D clouds; the SE(2) SLAM's slice
     thinned = [thin_scan(scans[k], cfg.scan.max_points, cfg.scan.max_range_m, cfg.grid.resolution_m)[0] for k in kept]
@@ -95,6 +97,10 @@ def write_slam_outputs(run: RunDir, scans: list[Scan], result: SlamResult, cfg: 
         "status_counts": result.status_counts(),
         "tracking_lost": result.tracking_lost,
         "lost_scans": result.lost_scans,
+        "ambiguous_trajectory": result.ambiguous_trajectory,
+        "trajectory_source": result.source,
+        "alternative": None if result.alternative is None else {
+            "source": result.alternative_source, "odds": round(result.alternative_odds, 3)},
         "match_score": [None if np.isnan(v) else round(float(v), 4) for v in result.match_score],
         "ms_per_scan": [round(float(v) * 1e3, 3) for v in result.seconds_per_scan],
         "loop_closures": [{"anchor": lc.anchor, "pose": lc.key, "score": lc.score, "weight": lc.weight}

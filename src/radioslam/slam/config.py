@@ -231,6 +231,21 @@ class PoseGraphConfig(_Section):
     inlier_chi2: float = Field(16.27, gt=0)
 
 
+class EndingConfig(_Section):
+    """The end-of-walk comparison of trajectories (:mod:`radioslam.slam.ending`)."""
+
+    enabled: bool = True
+    # each scan is scored against the scans before it whose poses lie within radius_m (a radio scan's
+    # echoes reach a few metres to ten), at most max_scans of them, nearest first
+    radius_m: float = Field(5.0, gt=0, le=100.0)
+    max_scans: int = Field(30, ge=1, le=1000)
+    # two trajectories whose every pose agrees within these are one hypothesis: they differ by how an error
+    # was spread (drift, a loop's correction), not by which place a scan was taken for (a fold, a flip, a
+    # wrong loop: a corridor's width, a door's spacing, a turn beyond the front end's distinct_deg)
+    same_m: float = Field(0.5, gt=0)
+    same_deg: float = Field(10.0, gt=0)
+
+
 class Anchors(str, Enum):
     """How loosely the plane adjustment holds each pose to the pose graph's."""
 
@@ -300,6 +315,7 @@ class SlamConfig(_Section):
     loop_closure: LoopClosureConfig = Field(default_factory=LoopClosureConfig)
     pose_graph: PoseGraphConfig = Field(default_factory=PoseGraphConfig)
     plane_adjustment: PlaneAdjustmentConfig = Field(default_factory=PlaneAdjustmentConfig)
+    ending: EndingConfig = Field(default_factory=EndingConfig)
     map: MapConfig = Field(default_factory=MapConfig)
 
 

@@ -23,6 +23,14 @@ class SlamResult:
     seconds_per_scan: np.ndarray = field(default_factory=lambda: np.zeros(0))
     planes: PlaneAdjustmentResult | None = None  # the walls of the last solve (None: not run)
     adjustment_seconds: float = 0.0  # the last solve's time (not in seconds_per_scan)
+    # the honest ending (issue #47, slam/ending.py): where the answer came from, the runner-up and its odds
+    source: str = "pose graph"
+    alternative: np.ndarray | None = None  # (P, 3) the runner-up when its odds are within the stated ones
+    alternative_source: str | None = None
+    alternative_odds: float = float("inf")  # p(answer) / p(runner-up)
+    ambiguous_trajectory: bool = False  # ★ metrics.json: a runner-up within the stated odds
+    ending_seconds: float = 0.0  # the comparison's time (not in seconds_per_scan)
+    ending_lines: list[str] = field(default_factory=list)  # what the comparison tells a user, a line each
     lost_after: int = 2  # this many consecutive predicted scans are a lost stretch
     dead_reckoned_after: int = 10  # and this many consecutive scans none of which fixed one pose
 
@@ -54,6 +62,7 @@ class SlamResult:
         and last, if tracking was lost, the lost stretches."""
         lines = [f"{len(keys)} scan(s) {status.value}: {scan_ranges(keys)}" for status in ScanStatus
                  if status is not ScanStatus.MATCHED and (keys := self.scans_with(status))]
+        lines += self.ending_lines
         if self.tracking_lost:
             lines.append(f"tracking lost: scans {scan_ranges(self.lost_scans)} matched nothing, or for many scans "
                          "in a row none fixed one pose (a direction nothing fixes, rival poses alike), and were "

@@ -21,6 +21,7 @@ import numpy as np
 from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.back_end import BackEnd
 from radioslam.slam.config import Anchors, SlamConfig
+from radioslam.slam.ending import Judge, Source, ambiguity_warning, odometry_in_map_frame
 from radioslam.slam.errors import SlamError
 from radioslam.slam.forks import Decision, Forks
 from radioslam.slam.front_end import FrontEnd, Step
@@ -179,7 +180,34 @@ class SlamSession:
         for k in [] if adjusted is None else adjusted.placed:
             steps[k] = steps[k].noted("placed on the walls the other scans sighted by the plane adjustment")
         result = self._result(poses if adjusted is None else adjusted.poses)
-        return replace(result, planes=adjusted, adjustment_seconds=time.perf_counter() - tick)
+        result = replace(result, planes=adjusted, adjustment_seconds=time.perf_counter() - tick)
+        # the honest ending: the trajectories held compared by their posteriors, the best the answer
+        return self._ending(result) if cfg.ending.enabled else result
+
+    def _ending(self, result: SlamResult) -> SlamResult:
+        """The result with the best of the pose graph's, the front end's and the odometry's trajectories, and
+        the runner-up when its odds are within the stated ones (a warning naming the cause)."""
+        tick = time.perf_counter()
+        motion = self.front_end.motion
+        candidates = [(Source.POSE_GRAPH, result.poses), (Source.FRONT_END, result.odometry)]
+        odometry = odometry_in_map_frame(motion.odometry, result.poses[0]) if motion.odometry is not None else None
+        if odometry is not None:
+            candidates.append((Source.ODOMETRY, odometry))
+        ending = Judge.from_config(self.cfg).judge(candidates, self.loop_closer.points, motion)
+        best, runner_up = ending.best, ending.runner_up
+        lines = []
+        if best.source is not Source.POSE_GRAPH:
+            lines.append(f"the {best.source.value}'s trajectory explains the scans and the motion better than the "
+                            f"pose graph's (odds {_odds(best, ending.hypotheses)}): it is the answer")
+        if ending.ambiguous:
+            lines.append(ambiguity_warning(best, runner_up, ending.runner_up_odds, result.status,
+                                              motion.odometry is not None))
+        return replace(result, poses=best.poses, source=best.source.value, warnings=result.warnings + lines,
+                       ending_lines=lines,
+                       ambiguous_trajectory=ending.ambiguous,
+                       alternative=runner_up.poses if ending.ambiguous else None,
+                       alternative_source=runner_up.source.value if ending.ambiguous else None,
+                       alternative_odds=ending.runner_up_odds, ending_seconds=time.perf_counter() - tick)
 
     def _result(self, poses: np.ndarray) -> SlamResult:
         steps, back_end, cfg = self.steps, self.back_end, self.cfg
@@ -207,3 +235,8 @@ class Contradiction:
 
     def better(self, score: float, step: Step) -> bool:
         return self.suspicious(step) and score >= (1.0 + self.gain) * step.score
+
+
+def _odds(best, hypotheses) -> str:
+    pose_graph = next(h for h in hypotheses if h.source is Source.POSE_GRAPH)
+    return f"{np.exp(min(best.log_posterior - pose_graph.log_posterior, 700.0)):.3g} : 1"

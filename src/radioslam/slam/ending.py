@@ -1,0 +1,181 @@
+"""The honest ending (issue #47, point 4): at the walk's end, the trajectories the SLAM holds are compared
+by their log posteriors, the best is the answer, and a runner-up within stated odds is reported with it.
+
+The hypotheses: the pose graph's solution (with the plane adjustment), the front end's chain (every
+step as it was matched, no loop), and the external odometry when given (placed at the first pose). Two
+that agree (every pose within ``same_m`` and ``same_deg``) are one. Each trajectory T scores
+
+    log p(T | scans, u) = Σ_k log p(scan k | T_k, map of the scans before k near T_k)
+                        + Σ_k log p(step k | motion, odometry)
+
+with the front end's measurement model (:mod:`radioslam.slam.measurement`: each specular arc one
+observation, unseen space at the prior of a surface, seen-through space contradicting) against the
+scans before k whose poses lie within ``radius_m`` of T_k (revisits included: a folded trajectory lays
+a corridor's scans over another's, where their echoes contradict each other), and the motion prior
+(:mod:`radioslam.slam.motion_prior`) of each step given the one before it and the odometry.
+
+A trajectory the scans cannot support better than the odometry (a corridor nothing fixes) then loses to
+the odometry; a pose graph that a wrong loop bent loses to its own front end; and when the runner-up's
+odds are better than 1 : ``odds``, the run says so (``ambiguous_trajectory``) and keeps the alternative.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+
+from radioslam.slam.grid import LikelihoodGrid, field_reach
+from radioslam.slam.measurement import scan_log_likelihoods
+from radioslam.slam.motion import MotionModel
+from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points, fused_seen
+from radioslam.slam.se2 import between, compose, inverse, wrap_angle
+
+
+class Source(str, Enum):
+    """Where a trajectory hypothesis comes from."""
+
+    POSE_GRAPH = "pose graph"
+    FRONT_END = "front end"
+    ODOMETRY = "odometry"
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    source: Source
+    poses: np.ndarray  # (P, 3) map frame
+    log_likelihood: float  # the scans' term
+    log_prior: float  # the motion's term
+
+    @property
+    def log_posterior(self) -> float:
+        return self.log_likelihood + self.log_prior
+
+
+@dataclass(frozen=True)
+class Ending:
+    """The hypotheses, best first, and whether the runner-up is within the stated odds of the best."""
+
+    hypotheses: list[Hypothesis]
+    odds: float  # the ambiguity threshold: 1 : odds
+
+    @property
+    def best(self) -> Hypothesis:
+        return self.hypotheses[0]
+
+    @property
+    def runner_up(self) -> Hypothesis | None:
+        return self.hypotheses[1] if len(self.hypotheses) > 1 else None
+
+    @property
+    def runner_up_odds(self) -> float:
+        """p(best) / p(runner-up) (inf: none)."""
+        if self.runner_up is None:
+            return float("inf")
+        return float(np.exp(min(self.best.log_posterior - self.runner_up.log_posterior, 700.0)))
+
+    @property
+    def ambiguous(self) -> bool:
+        return self.runner_up_odds < self.odds
+
+
+class Judge:
+    """Built from plain values: the likelihood grid's settings, the neighbourhood of a scan's map, when two
+    trajectories are one, and the stated odds."""
+
+    def __init__(self, resolution_m: float, sigma_m: float, normal_sigma_rad: float, plane_reach_m: float,
+                 free_penalty: float, radius_m: float, max_scans: int, same_m: float, same_rad: float, odds: float):
+        self.resolution_m, self.sigma_m, self.normal_sigma_rad = resolution_m, sigma_m, normal_sigma_rad
+        self.plane_reach_m, self.free_penalty = plane_reach_m, free_penalty
+        self.radius_m, self.max_scans = radius_m, max_scans
+        self.same_m, self.same_rad, self.odds = same_m, same_rad, odds
+
+    @classmethod
+    def from_config(cls, cfg) -> "Judge":
+        g, e = cfg.grid, cfg.ending
+        return cls(g.resolution_m, g.sigma_m, np.radians(g.normal_sigma_deg), g.plane_reach_m, g.free_penalty,
+                   e.radius_m, e.max_scans, e.same_m, np.radians(e.same_deg), cfg.front_end.rival_odds)
+
+    def judge(self, candidates: list[tuple[Source, np.ndarray]], scans: dict[int, ScanPoints],
+              motion: MotionModel) -> Ending:
+        """The candidates (source, (P, 3) poses), those alike merged (the first kept), scored and ranked."""
+        kept: list[tuple[Source, np.ndarray]] = []
+        for source, poses in candidates:
+            if not any(self._alike(poses, other) for _, other in kept):
+                kept.append((source, poses))
+        scored = [Hypothesis(source, poses, self.log_likelihood(poses, scans), log_prior(poses, motion))
+                  for source, poses in kept]
+        return Ending(sorted(scored, key=lambda h: -h.log_posterior), self.odds)
+
+    def _alike(self, a: np.ndarray, b: np.ndarray) -> bool:
+        return bool(np.all(np.linalg.norm(a[:, :2] - b[:, :2], axis=1) <= self.same_m)
+                    and np.all(np.abs(wrap_angle(a[:, 2] - b[:, 2])) <= self.same_rad))
+
+    def log_likelihood(self, poses: np.ndarray, scans: dict[int, ScanPoints]) -> float:
+        """Σ_k log p(scan k | T_k, the scans before k within ``radius_m`` of T_k, at most ``max_scans``, nearest)."""
+        estimates = {k: poses[k] for k in scans}
+        keys = sorted(scans)
+        total = 0.0
+        for i, k in enumerate(keys[1:], start=1):
+            earlier = np.array(keys[:i])
+            distance = np.linalg.norm(poses[earlier, :2] - poses[k, :2], axis=1)
+            near = earlier[np.argsort(distance, kind="stable")[: self.max_scans]]
+            near = sorted(near[np.linalg.norm(poses[near, :2] - poses[k, :2], axis=1) <= self.radius_m].tolist())
+            if not near:
+                continue
+            xy, normals = fused_points(near, estimates, scans, np.zeros(3))
+            if not len(xy):
+                continue
+            grid = LikelihoodGrid.from_points(
+                xy, self.resolution_m, self.sigma_m, field_reach(self.sigma_m, self.resolution_m, self.plane_reach_m),
+                normals, self.normal_sigma_rad, self.plane_reach_m, fused_free(near, estimates, scans),
+                self.free_penalty, fused_seen(near, estimates, scans))
+            points = scans[k]
+            total += float(scan_log_likelihoods(grid, points.xy, points.normals, points.observation_weights,
+                                                poses[k])[0])
+        return total
+
+
+def log_prior(poses: np.ndarray, motion: MotionModel) -> float:
+    """Σ_k log p(step k) of the motion prior, each step's hypotheses those of the trajectory's own last step
+    (and the odometry's step k)."""
+    total, model = 0.0, MotionModel(motion.pace_scans, motion.straight_rad, motion.odometry,
+                                     platform=motion.platform, max_step_m=motion.max_step_m,
+                                     odometry_sigmas=motion.odometry_sigmas)
+    for k in range(1, len(poses)):
+        step = between(poses[k - 1], poses[k])
+        total += float(model.prior(k, poses[k - 1]).log_prob(step[None])[0])
+        model.velocity = step
+    return total
+
+
+def odometry_in_map_frame(odometry: np.ndarray, first_pose: np.ndarray) -> np.ndarray | None:
+    """Full odometry poses (P, 3) carried rigidly so that the first lies at ``first_pose`` (None: a gyro's)."""
+    if odometry is None or np.isnan(odometry[:, :2]).any():
+        return None
+    carry = compose(first_pose, inverse(odometry[0]))
+    return np.array([compose(carry, pose) for pose in odometry])
+
+
+def ambiguity_warning(best: Hypothesis, runner_up: Hypothesis, odds: float, status: list, odometry: bool) -> str:
+    """One line: the two trajectories, their odds, where they part, why the scans cannot decide, what would help."""
+    from radioslam.slam.result import scan_ranges
+    from radioslam.slam.status import ScanStatus
+
+    apart = np.flatnonzero((np.linalg.norm(best.poses[:, :2] - runner_up.poses[:, :2], axis=1) > 0.2)
+                           | (np.abs(wrap_angle(best.poses[:, 2] - runner_up.poses[:, 2])) > np.radians(5.0)))
+    span = f"scans {scan_ranges(apart.tolist())}" if len(apart) else "every scan within 0.2 m and 5°"
+    there = [status[k] for k in apart] if len(apart) else list(status)
+    causes = []
+    if ScanStatus.DEGENERATE in there:
+        causes.append("nothing fixes the position along a corridor or wall")
+    if ScanStatus.AMBIGUOUS in there:
+        causes.append("places that look alike under a turn or a shift")
+    if ScanStatus.PREDICTED in there or ScanStatus.SKIPPED in there:
+        causes.append("scans with too few echoes (open space, or nothing within range)")
+    why = "; ".join(causes) or "the scans explain both about as well"
+    helps = "a slower walk past the places where they part" if odometry else "odometry or a gyro (--odometry)"
+    return (f"ambiguous trajectory: the {runner_up.source.value}'s is within odds of 1 : {odds:.3g} of the "
+            f"{best.source.value}'s answer ({span} differ): {why}; it is written as trajectory_alternative.tum; "
+            f"what would help: {helps}")
