@@ -175,6 +175,10 @@ def test_scan_statuses_and_tracking_lost_are_recorded(demo_run):
     assert {ScanStatus(s) for s in statuses} <= set(ScanStatus)
     assert doc["status_counts"] == {s.value: statuses.count(s.value) for s in ScanStatus}
     assert metrics["tracking_lost"] is False and metrics["status_counts"] == doc["status_counts"]
+    # the honest ending (issue #47): the pose graph's answer, no runner-up within odds
+    assert metrics["ambiguous_trajectory"] is False and doc["ambiguous_trajectory"] is False
+    assert doc["trajectory_source"] == "pose graph" and doc["alternative"] is None
+    assert not (out / "trajectory_alternative.tum").exists()
     # what the points show stays in the grid (issue #12 point 8)
     assert metrics["map_points_occupied"] >= 0.9 and metrics["map_points_free"] <= 0.02
 
@@ -267,6 +271,36 @@ def test_strict_turns_a_lost_stretch_into_exit_3(demo_run, tmp_path):
     assert "tracking lost: scans 20–22" in done.stderr
     assert json.loads((run / "slam.json").read_text())["tracking_lost"] is True
     assert _cli("slam", str(run)).returncode == 0  # without --strict: a warning, not a failure
+
+
+def test_an_ambiguous_trajectory_is_said_written_and_strict_about(demo_run, tmp_path):
+    """With the ending told to keep the pose graph's and the front end's trajectories apart (no merging) and
+    to call any runner-up close, the demo's walk ends ambiguous: one warning line naming the runner-up and
+    trajectory_alternative.tum, ``ambiguous_trajectory`` true in slam.json and metrics.json, and --strict
+    exits with status 3."""
+    import shutil
+
+    from radioslam.io.tum import read_tum
+
+    out, _ = demo_run
+    run = tmp_path / "ambiguous"
+    run.mkdir()
+    for name in ("scene.yaml", "ground_truth.tum"):
+        shutil.copyfile(out / name, run / name)
+    shutil.copytree(out / "scans", run / "scans")
+    config = tmp_path / "config.yaml"
+    config.write_text("slam: {ending: {same_m: 1.0e-9, same_deg: 1.0e-9, odds: 1.0e300}}\n")
+    done = _cli("slam", str(run), "--config", str(config), "--strict")
+    assert done.returncode == 3, done.stderr
+    assert "ambiguous trajectory (--strict)" in done.stderr
+    assert sum(line.startswith("radioslam: warning: ambiguous trajectory") for line in done.stderr.splitlines()) == 1
+    doc = json.loads((run / "slam.json").read_text())
+    assert doc["ambiguous_trajectory"] is True and doc["alternative"]["source"] in ("front end", "pose graph")
+    _, alternative = read_tum(run / "trajectory_alternative.tum")
+    _, answer = read_tum(run / "trajectory.tum")
+    assert alternative.shape == answer.shape and not np.allclose(alternative, answer)
+    assert _cli("evaluate", str(run)).returncode == 0
+    assert json.loads((run / "metrics.json").read_text())["ambiguous_trajectory"] is True
 
 
 @pytest.mark.parametrize("statuses, lost", [

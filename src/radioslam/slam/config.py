@@ -244,6 +244,9 @@ class EndingConfig(_Section):
     # wrong loop: a corridor's width, a door's spacing, a turn beyond the front end's distinct_deg)
     same_m: float = Field(0.5, gt=0)
     same_deg: float = Field(10.0, gt=0)
+    # a runner-up whose posterior odds against the answer are better than 1 : odds makes the trajectory
+    # ambiguous (the front end's rival_odds, for a whole walk)
+    odds: float = Field(20.0, gt=1)
 
 
 class Anchors(str, Enum):

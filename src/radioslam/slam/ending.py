@@ -21,7 +21,7 @@ odds are better than 1 : ``odds``, the run says so (``ambiguous_trajectory``) an
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import Enum
 
 import numpy as np
@@ -29,7 +29,7 @@ import numpy as np
 from radioslam.slam.grid import LikelihoodGrid, field_reach
 from radioslam.slam.measurement import scan_log_likelihoods
 from radioslam.slam.motion import MotionModel
-from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points, fused_seen
+from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points, fused_seen, viewpoints
 from radioslam.slam.se2 import between, compose, inverse, wrap_angle
 
 
@@ -95,7 +95,7 @@ class Judge:
     def from_config(cls, cfg) -> "Judge":
         g, e = cfg.grid, cfg.ending
         return cls(g.resolution_m, g.sigma_m, np.radians(g.normal_sigma_deg), g.plane_reach_m, g.free_penalty,
-                   e.radius_m, e.max_scans, e.same_m, np.radians(e.same_deg), cfg.front_end.rival_odds)
+                   e.radius_m, e.max_scans, e.same_m, np.radians(e.same_deg), e.odds)
 
     def judge(self, candidates: list[tuple[Source, np.ndarray]], scans: dict[int, ScanPoints],
               motion: MotionModel) -> Ending:
@@ -131,6 +131,7 @@ class Judge:
                 xy, self.resolution_m, self.sigma_m, field_reach(self.sigma_m, self.resolution_m, self.plane_reach_m),
                 normals, self.normal_sigma_rad, self.plane_reach_m, fused_free(near, estimates, scans),
                 self.free_penalty, fused_seen(near, estimates, scans))
+            grid = replace(grid, viewpoints=viewpoints(near, estimates, scans))
             points = scans[k]
             total += float(scan_log_likelihoods(grid, points.xy, points.normals, points.observation_weights,
                                                 poses[k])[0])

@@ -31,7 +31,7 @@ from radioslam.slam.measurement import scan_log_likelihoods
 from radioslam.slam.motion import Hypothesis, MotionHypothesis, MotionModel, jump_covariance
 from radioslam.slam.refine import fit_scores, refine_poses
 from radioslam.slam.rotation_search import HeadingSearch
-from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points, fused_seen
+from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points, fused_seen, viewpoints
 from radioslam.slam.se2 import between, pose_covariance, wrap_angle
 from radioslam.slam.status import ScanStatus
 
@@ -240,6 +240,7 @@ class FrontEnd:
         grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, normals,
                                           np.radians(g.normal_sigma_deg), g.plane_reach_m, free, g.free_penalty,
                                           fused_seen(keys, estimates, self.points))
+        grid = replace(grid, viewpoints=viewpoints(keys, estimates, self.points))
         return grid, normals
 
     def local_map_keys(self, estimates: dict[int, np.ndarray]) -> list[int]:

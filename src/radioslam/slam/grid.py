@@ -66,6 +66,9 @@ class LikelihoodGrid:
     # the likelihood a point gets where the map never looked: the field's mean over the cells it observed,
     # the prior of a surface there (the likelihood field marginalized over a map it does not know)
     neutral: float = 0.0
+    # (J, 3) where the map's scans were taken (x, y) and how far each saw (its farthest echo): whether the map
+    # could have detected a surface of a given orientation (:mod:`radioslam.slam.measurement`); None: unknown
+    viewpoints: np.ndarray | None = None
 
     @property
     def plane_values(self) -> np.ndarray:

@@ -9,8 +9,12 @@ surface the map does not hold), and twice the floor's log on space the map saw t
 a wall where the map's echoes passed). Where the map never looked (no beam of its scans swept the cell)
 a point is neither explained nor contradicted: it scores the prior likelihood of a surface there, the
 field's mean over the space the map did observe (the likelihood field marginalized over an unknown map;
-``LikelihoodGrid.neutral``), or the floor if that is higher. An exploring pose, whose new walls lie where
-the map never looked, then no longer loses to a twin that lays them over mapped walls for that alone.
+``LikelihoodGrid.neutral``), or the floor if that is higher. For a point on a specular arc (its surface's
+orientation known) "looked" means more: some viewpoint of the map met that surface within 30° of its
+normal (:func:`faced`); a wall parallel to every line of sight the map had (a side corridor's walls seen
+from the corridor it branches off) is unseen however many beams crossed its place. An exploring pose,
+whose new walls lie where the map never looked, then no longer loses to a twin that lays them over
+mapped walls for that alone.
 
 The points of one specular arc are one echo of one surface seen through adjacent beams (their ranges
 are one measurement, their bearings the beams' pointing): counted as independent they would be
@@ -26,6 +30,10 @@ from radioslam.slam.grid import LIKELIHOOD_FLOOR, LikelihoodGrid
 from radioslam.slam.refine import fit_terms
 
 LOG_FLOOR = float(np.log(LIKELIHOOD_FLOOR))
+# the largest incidence at which a wall shows in a scan: the sensing's −13 dB rule keeps diffuse echoes of
+# walls met within about 30° of their normal (docs/architecture.md, § Echo model)
+DETECTABLE_INCIDENCE = np.radians(30.0)
+COS_DETECTABLE = float(np.cos(DETECTABLE_INCIDENCE))
 
 
 def point_log_likelihoods(values: np.ndarray, unseen: np.ndarray | bool = False, neutral: float = 0.0) -> np.ndarray:
@@ -48,4 +56,18 @@ def scan_log_likelihoods(grid: LikelihoodGrid, points: np.ndarray, normals: np.n
                           s * points[:, 0] + c * points[:, 1] + poses[:, 1:2]], axis=-1)
         cells = grid.cells(world)
         unseen = ~grid.seen[cells[..., 0], cells[..., 1]]
+        if grid.viewpoints is not None and len(grid.viewpoints):
+            unseen = np.where(np.isnan(normals), unseen, ~faced(world, poses[:, 2:3] + normals, grid.viewpoints))
     return point_log_likelihoods(1.0 - residual, unseen, grid.neutral) @ weights
+
+
+def faced(world: np.ndarray, bearing: np.ndarray, viewpoints: np.ndarray) -> np.ndarray:
+    """Whether a surface at each point (C, P, 2), facing back along the world ``bearing`` (C, P) of its
+    specular normal, lay within reach of a viewpoint (J, 3: x, y, reach) that met it within
+    ``DETECTABLE_INCIDENCE`` of its normal: a wall the map would have shown. A radio beam meeting a wall
+    more obliquely returns too little (specular energy goes on, the diffuse lobe falls below the −13 dB
+    rule): the map's silence there says nothing, however many of its beams crossed the place."""
+    rel = world[:, :, None, :] - viewpoints[None, None, :, :2]  # (C, P, J, 2) from each viewpoint to the point
+    distance = np.linalg.norm(rel, axis=-1)
+    along = rel[..., 0] * np.cos(bearing)[..., None] + rel[..., 1] * np.sin(bearing)[..., None]
+    return np.any((along >= COS_DETECTABLE * distance) & (distance <= viewpoints[:, 2]), axis=-1)

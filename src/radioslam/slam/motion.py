@@ -79,7 +79,7 @@ class MotionModel:
         if step is not None and not self.gyro_only:
             return MotionPrior.of(steps, self.platform, self.max_step_m, self.odometry_sigmas)
         gyro = None if step is None else (float(step[2]), float(self.odometry_sigmas[2]))
-        return MotionPrior.of(steps, self.platform, self.max_step_m, gyro=gyro)
+        return MotionPrior.of(steps, self.platform, self.max_step_m, gyro=gyro, pace_known=self.velocity is not None)
 
     def hypotheses(self, k: int, last: np.ndarray) -> list[Hypothesis]:
         """Where pose k may be, given pose k − 1 at ``last``; the primary hypothesis first."""

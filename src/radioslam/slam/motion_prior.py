@@ -76,16 +76,20 @@ class MotionPrior:
 
     @classmethod
     def of(cls, hypotheses: np.ndarray, platform: PlatformModel, max_step_m: float,
-           odometry_sigmas: np.ndarray | None = None, gyro: tuple[float, float] | None = None) -> "MotionPrior":
+           odometry_sigmas: np.ndarray | None = None, gyro: tuple[float, float] | None = None,
+           pace_known: bool = True) -> "MotionPrior":
         """The prior around the step ``hypotheses`` (H, 3) (odometry's first when ``odometry_sigmas``, its
         per-step sds (3,), are given: then it alone); ``gyro`` (turn, sd): a measured turn with no
-        translation, replacing every hypothesis' turn."""
+        translation, replacing every hypothesis' turn. Without a known pace (the walk's first step, or the
+        first after a jump: no last step to repeat) the translation is any step's: half ``max_step_m``
+        either way."""
         hypotheses = np.atleast_2d(np.asarray(hypotheses, dtype=np.float64))
         if odometry_sigmas is not None:
             means, sigmas = hypotheses[:1], np.atleast_2d(odometry_sigmas).astype(np.float64)
         else:
             means = hypotheses.copy()
-            sigmas = np.tile([platform.along_m, platform.across_m, platform.turn_rad], (len(means), 1))
+            along, across = (platform.along_m, platform.across_m) if pace_known else (max_step_m / 2,) * 2
+            sigmas = np.tile([along, across, platform.turn_rad], (len(means), 1))
         if gyro is not None:
             means, sigmas = means.copy(), sigmas.copy()
             means[:, 2], sigmas[:, 2] = gyro[0], gyro[1]

@@ -73,3 +73,8 @@ def fused_seen(keys: list[int], poses: dict[int, np.ndarray], scans: dict[int, S
 
 def _in_world(keys: list[int], poses: dict[int, np.ndarray], samples: list[np.ndarray]) -> np.ndarray:
     return np.concatenate([transform_points(poses[k], a) for k, a in zip(keys, samples)] or [np.zeros((0, 2))])
+
+
+def viewpoints(keys: list[int], poses: dict[int, np.ndarray], scans: dict[int, ScanPoints]) -> np.ndarray:
+    """(J, 3) each scan's world position and reach (its farthest echo or free sample)."""
+    return np.array([[poses[k][0], poses[k][1], scans[k].reach] for k in keys]).reshape(-1, 3)
