@@ -69,7 +69,7 @@ def test_a_folded_trajectory_loses_to_the_true_one():
     fold = 14
     jump = compose(truth[fold - 1], compose(np.array([0.0, 0.0, np.pi]), inverse(truth[fold - 1])))
     folded[fold:] = np.array([compose(jump, p) for p in truth[fold:]])
-    ending = _judge().judge([(Source.FRONT_END, folded), (Source.POSE_GRAPH, truth)], scans, _motion())
+    ending = _judge().judge([(Source.RIVAL_BRANCH, folded), (Source.POSE_GRAPH, truth)], scans, _motion())
     assert ending.best.source is Source.POSE_GRAPH
     assert not ending.ambiguous and ending.runner_up_odds > 1e3
 
@@ -80,7 +80,7 @@ def test_trajectories_within_the_merge_radius_are_one_hypothesis():
     truth = _in_frame(poses)
     nudged = truth + np.random.default_rng(1).normal(0, 0.01, truth.shape) * [1, 1, 0.01]
     nudged[0] = 0.0
-    ending = _judge().judge([(Source.POSE_GRAPH, truth), (Source.FRONT_END, nudged)], _scans(segments, poses),
+    ending = _judge().judge([(Source.POSE_GRAPH, truth), (Source.RIVAL_BRANCH, nudged)], _scans(segments, poses),
                             _motion())
     assert [h.source for h in ending.hypotheses] == [Source.POSE_GRAPH] and not ending.ambiguous
 
@@ -98,10 +98,10 @@ def test_a_quarter_turn_in_a_square_is_ambiguous_and_the_alternative_kept():
     scans = _scans(segments, turned)
     still = _in_frame(poses)  # a trajectory that never turned: the room explains its scans alike
     truth = _in_frame(turned)
-    ending = _judge().judge([(Source.POSE_GRAPH, still), (Source.FRONT_END, truth)], scans, _motion())
+    ending = _judge().judge([(Source.POSE_GRAPH, still), (Source.RIVAL_BRANCH, truth)], scans, _motion())
     assert ending.ambiguous and np.exp(2.0) < ending.runner_up_odds < 20.0
     assert ending.best.source is Source.POSE_GRAPH  # not turning is the likelier motion
-    assert not _judge(odds=5.0).judge([(Source.POSE_GRAPH, still), (Source.FRONT_END, truth)], scans,
+    assert not _judge(odds=5.0).judge([(Source.POSE_GRAPH, still), (Source.RIVAL_BRANCH, truth)], scans,
                                       _motion()).ambiguous
 
 

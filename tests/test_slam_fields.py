@@ -79,6 +79,31 @@ def test_free_lines_start_at_the_disc_and_end_short_of_the_foot(stop):
     assert np.linalg.norm(on_lines[bearing > 45], axis=1).max() == pytest.approx(2.0 - stop, abs=0.025)
 
 
+def test_the_motion_decides_what_the_scan_cannot_tell_apart_and_no_more():
+    """``front_end.choose``: within the ambiguity margin of the best discounted score the smallest
+    discount wins, unless the scan explains a turned candidate clearly better with a trusted match.
+    The first case is l-shape-random-6's scan 57 (a true U-turn with a step back: raw 0.711 against
+    0.488 for walking on, discounts 0.43 and 0.19), which the motion took before (0.60 m ATE)."""
+    from radioslam.slam.front_end import choose as choose_with_close
+
+    def choose(*args):
+        return choose_with_close(*args)[0]
+
+    walk_on, u_turn = [0.40, 1.20, 0.47], [-0.45, -0.26, 0.47 - np.pi]
+    candidates = np.array([walk_on, u_turn])
+    margin, turn, trusted = 0.08, np.radians(6.0), 0.35
+    assert choose(candidates, np.array([0.488, 0.711]), np.array([0.189, 0.429]), margin, turn, trusted) == 1
+    # a twin the scan cannot tell apart (scores within the margin): the motion decides
+    assert choose(candidates, np.array([0.66, 0.70]), np.array([0.0, 0.25]), margin, turn, trusted) == 0
+    # clearly better but a weak match (below the trust ramp's top): the motion decides
+    assert choose(candidates, np.array([0.214, 0.273]), np.array([0.02, 0.30]), margin, turn, trusted) == 0
+    # not turned (a translation only): the motion decides, however the scores differ
+    shifted = np.array([walk_on, [0.0, 0.0, 0.47]])
+    assert choose(shifted, np.array([0.36, 0.40]), np.array([0.0, 0.15]), margin, turn, trusted) == 0
+    # outside the margin of the best discounted score: the best discounted score wins, turned or not
+    assert choose(candidates, np.array([0.30, 0.90]), np.array([0.0, 0.30]), margin, turn, trusted) == 1
+
+
 def test_a_turn_the_scan_shows_is_refined_whatever_its_rank_by_discounted_score():
     """The front end refines the candidates :func:`choose` may pick: the best by discounted score
     (branch and bound's order) and those the scan explains clearly better whose discounted score is

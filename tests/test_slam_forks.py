@@ -306,22 +306,41 @@ def test_switching_carries_every_pose_since_the_fork_and_the_graph_keeps_the_riv
     np.testing.assert_allclose(back_end.chain[5], back_end.estimates[5], atol=1e-6)
 
 
-def test_a_u_turn_in_a_hall_is_taken_by_the_posterior_without_a_fork():
-    """A 28 m hall walked at a slant, U-turns between two scans near its centre line. Where the front end
-    took one for walking on (the motion deciding among candidates within a margin of score), the walk back
-    over the mapped hall ran metres off until a fork's rival branch closed a loop with the map from before
-    the turn (issue #12). The posterior (issue #47) weighs the half turn's prior cost (≈ 7 nats) against
-    the scan's evidence for it and takes the U-turns itself: the walk holds with the forks switched off."""
+def test_a_u_turn_in_a_hall_taken_for_walking_on_is_found_by_the_loop_it_closes(monkeypatch):
+    """A 28 m hall walked at a slant, U-turns between two scans near its centre line. Where the
+    front end takes one for walking on (the motion deciding among candidates within the margin, as it
+    did before ``front_end.choose`` let a turn the scan shows clearly win), the walk back over the
+    mapped hall runs metres off; the rival's branch closes a loop with the map from before the turn,
+    and its points since agree with that map where the chosen branch's land on space it saw through:
+    taken, the walk is at its true place. A straight hall looks alike under a U-turn about its centre
+    line, so only the sign test, not the map's look, decides. With ``choose`` the front end takes the
+    U-turns itself."""
     from test_slam_motion import sensed
 
     from radioslam.eval.trajectory_metrics import ate_rmse
     from radioslam.scene.procedural import MotionKind, RoomKind, generate_case
+    from radioslam.slam import front_end
+
+    def motion_decides(candidates, scores, discount, margin, turn_rad, trusted):
+        adjusted = scores * (1.0 - discount)
+        close = np.flatnonzero(adjusted >= (1.0 - margin) * adjusted.max())
+        return int(close[np.argmin(discount[close])]), close
 
     case = generate_case(RoomKind.HALL, MotionKind.RANDOM, 13, max_poses=24)
     scans = sensed(case.scene, case.seed)
     no_forks = SlamConfig.model_validate({"loop_closure": {"fork_limit": 0}})
+    with monkeypatch.context() as patched:
+        patched.setattr(front_end, "choose", motion_decides)
+        without = RadioSlam(no_forks).run(scans)
+        result = RadioSlam().run(scans)
+    assert ate_rmse(without.poses, case.scene.poses) > 1.0
+    assert ate_rmse(result.poses, case.scene.poses) <= 0.2
+    turned = np.abs(wrap_angle(np.diff(case.scene.poses[:, 2])))
+    u_turns = set(np.flatnonzero(turned > np.radians(150.0)) + 1)  # the scans the walk turns back at
+    taken = {int(w.split(":")[0].split()[1]) for w in result.warnings if "rival taken" in w}
+    assert taken and taken <= u_turns  # a U-turn taken for walking on, and its rival taken
+    assert all(result.status[k] is ScanStatus.AMBIGUOUS for k in taken)
     assert ate_rmse(RadioSlam(no_forks).run(scans).poses, case.scene.poses) <= 0.2
-    assert ate_rmse(RadioSlam().run(scans).poses, case.scene.poses) <= 0.2
 
 
 def test_two_open_forks_are_also_tested_together_latest_switch_first():
@@ -422,48 +441,67 @@ def recorded_walk(name: str):
     return scans, load_scene("narrow-corridor").poses[:len(scans)]
 
 
-def corner_turned(name: str) -> None:
-    """SLAM on the recorded walk ``name``: the trajectory within 0.2 m (ATE) and 3° of the truth."""
+def corner_taken(name: str, corner: int) -> list[str]:
+    """SLAM on the recorded walk ``name``: its scan ``corner`` is ambiguous and its rival is taken, the
+    trajectory within 0.2 m (ATE) and 3° of the truth. Returns the warnings saying so."""
     from radioslam.eval.trajectory_metrics import ate_rmse
 
     scans, truth = recorded_walk(name)
     result = RadioSlam().run(scans)
+    assert result.status[corner] is ScanStatus.AMBIGUOUS
+    taken = [w for w in result.warnings if w.startswith(f"scan {corner}:") and "rival taken" in w]
+    assert taken
     assert ate_rmse(result.poses, truth) <= 0.2
     turn = wrap_angle(wrap_angle(result.poses[:, 2] - result.poses[0, 2]) - wrap_angle(truth[:, 2] - truth[0, 2]))
     assert np.degrees(np.abs(turn)).max() < 3.0
+    return taken
 
 
 def test_a_walk_around_a_block_turns_its_first_corner():
     """narrow-corridor (2.4 m wide around an 11.2 m × 4 m block), seed 1, the first 50 scans, recorded
     (sensed by session 15's receiver). At scan 37, just into the side corridor, 16 of the scan's 37
     points are that corridor's side walls, which no pose in the first corridor faced (specular walls
-    parallel to its lines of sight): the true pose scored 0.45, the first corridor turned back onto
-    itself 0.65, and that turn was taken (2.84 m over these 50 scans, 5.15 m over the walk, silent); a
-    fork then decided it two scans later (issue #12). The measurement model (issue #47) counts a point on
-    a wall no viewpoint of the map met within 30° of its normal as unseen, at the prior of a surface, not
-    as unexplained: the posterior takes the corner itself."""
-    corner_turned("narrow-corridor-1-scans.npz")
+    parallel to its lines of sight): the true pose scores 0.45, the first corridor turned back onto
+    itself 0.65, and that turn, seen in the scan, was taken (2.84 m over these 50 scans, 5.15 m over the
+    walk, silent). The motion's choice now stays a rival; the folded branch puts 10 of its next scan's 71
+    points where the terminal walked, the corner's branch none, and exploring it closes no loop: the
+    contradiction alone decides, two scans later."""
+    assert any("saw through" in w for w in corner_taken("narrow-corridor-1-scans.npz", 37))
 
 
 def test_a_walk_around_a_block_closes_its_last_corner_onto_its_start():
     """narrow-corridor, seed 6, the first 122 scans, recorded (sensed by session 15's receiver). At scan 110,
     the fourth corner, the terminal turns back into the corridor it started in. The left corridor it just
-    came down, folded onto the start's corridor (the corner is symmetric about its diagonal), explained the
-    scan best (0.82) against the true pose's 0.38 (1.74 m over the walk, silent, before issue #12's forks).
-    The corner's new walls, unseen from the corridors before it, no longer count against the true pose."""
-    corner_turned("narrow-corridor-6-scans.npz")
+    came down, folded onto the start's corridor (the corner is symmetric about its diagonal), explains the
+    scan best (0.82); the true pose scores 0.38 against the map's corner clutter and was no candidate:
+    the motion's choice among the candidates was 0.4 m ahead of it, and that branch puts as many points
+    on the old map's free space as the folded one (1.74 m over the walk, silent). The prediction's own fit
+    now stays a rival too, within 0.1 m of the truth; the folded branch reaches the far end of the corridor
+    it folds onto and puts its points where the terminal walked (18 against the rival's 1), and the
+    contradiction alone decides, eleven scans on."""
+    corner_taken("narrow-corridor-6-scans.npz", 110)
 
 
 def test_a_walk_around_a_block_turns_its_second_corner():
     """narrow-corridor, seed 8, the first 80 scans, recorded (sensed by session 15's receiver). At scan 57,
-    the second corner, the corridor folded back onto itself was taken (4.08 m over these scans, silent,
-    before issue #12's forks)."""
-    corner_turned("narrow-corridor-8-scans.npz")
+    the second corner, the corridor folded back onto itself was taken; the rivals, the motion's choice
+    among the candidates, sat 0.3–0.4 m off the truth in the corner's clutter, where their branches put
+    about as many points on the old map's free space as the fold (24 and 13 against its 27 by scan 70),
+    and the forks the fold opened when it ran into the first corner (scans 67–70) evicted its fork
+    (4.08 m over these scans, silent). Each branch counted where the map from before places it, and a
+    contradicted fork kept, the fork is decided ten scans on."""
+    corner_taken("narrow-corridor-8-scans.npz", 57)
 
 
-def test_a_corner_folded_beyond_a_step_is_turned():
+def test_a_corner_folded_beyond_a_step_keeps_the_prediction_as_a_rival_decided_at_the_walks_end():
     """narrow-corridor, seed 17, the whole walk, recorded with every range moved by up to 1 µm (a draw of
     the stability check). At scan 110, the fourth corner, the start's corridor folded onto the one just
-    walked explained the scan best (0.84), 1.6 m from the last pose: beyond any step (1.74 m over the walk,
-    silent, before issue #12's forks)."""
-    corner_turned("narrow-corridor-17-scans.npz")
+    walked explains the scan best (0.84), 1.6 m from the last pose: beyond any step. Branch and bound had
+    kept no candidate near the motion (without the draw it keeps one, which scores 0.45 and stays a
+    rival), so no rival and no fork: 1.74 m over the walk, silent. The prediction's own fit now stays a
+    rival (with the incremental back end's estimates, issue #14, the motion's candidate is kept and the
+    scan is turned from it), and the fork is decided when the walk ends, eleven scans on: the fold's
+    points on the old map's free space against the rival's, at the plain significance, as no later scan
+    can add evidence."""
+    taken = corner_taken("narrow-corridor-17-scans.npz", 110)
+    assert any("rival" in w and "taken at scan 121" in w for w in taken)

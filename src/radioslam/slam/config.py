@@ -84,10 +84,7 @@ class FrontEndConfig(_Section):
     # and, once a step is predicted, by this fraction times its distance from the predicted position
     # per max_step_m (capped at 1)
     translation_prior: float = Field(0.2, ge=0, lt=1)
-    # a candidate whose posterior odds against the chosen one are better than 1 : rival_odds is its rival:
-    # the scan is ambiguous (a probability ratio: 20 is the 5 % a rival keeps at least)
-    rival_odds: float = Field(20.0, gt=1)
-    # the search keeps candidates whose discounted scores lie within this fraction of the best
+    # two distinct candidates whose discounted scores differ by less than this fraction are ambiguous
     ambiguity_margin: float = Field(0.08, ge=0, lt=1)
     # branch and bound scores on the 5 cm lattice, where a point may sit a cell from its wall (a
     # loss of up to e^(-1/2) per point): it keeps candidates this much further below the best, and up
@@ -245,7 +242,7 @@ class EndingConfig(_Section):
     same_m: float = Field(0.5, gt=0)
     same_deg: float = Field(10.0, gt=0)
     # a runner-up whose posterior odds against the answer are better than 1 : odds makes the trajectory
-    # ambiguous (the front end's rival_odds, for a whole walk)
+    # ambiguous (a probability ratio: the runner-up keeps at least 5 %)
     odds: float = Field(20.0, gt=1)
 
 

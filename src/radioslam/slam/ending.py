@@ -1,17 +1,20 @@
 """The honest ending (issue #47, point 4): at the walk's end, the trajectories the SLAM holds are compared
 by their log posteriors, the best is the answer, and a runner-up within stated odds is reported with it.
 
-The hypotheses: the pose graph's solution (with the plane adjustment), the front end's chain (every
-step as it was matched, no loop), and the external odometry when given (placed at the first pose). Two
-that agree (every pose within ``same_m`` and ``same_deg``) are one. Each trajectory T scores
+The hypotheses: the pose graph's solution (with the plane adjustment), the external odometry when given
+(placed at the first pose), and the branches of the forks still open at the end (an ambiguous scan's
+rival, every later pose carried with it: :mod:`radioslam.slam.forks`). The front end's own chain is no
+hypothesis here: it is greedy in exactly this likelihood (each scan placed on its predecessors), and beat
+the loop-corrected trajectory on it where the latter was ten times closer to the truth (docs/notes.md,
+session 28). Two that agree (every pose within ``same_m`` and ``same_deg``) are one. Each trajectory T scores
 
-    log p(T | scans, u) = Σ_k log p(scan k | T_k, map of the scans before k near T_k)
+    log p(T | scans, u) = Σ_k log p(scan k | T_k, map of the other scans near T_k)
                         + Σ_k log p(step k | motion, odometry)
 
 with the front end's measurement model (:mod:`radioslam.slam.measurement`: each specular arc one
 observation, unseen space at the prior of a surface, seen-through space contradicting) against the
-scans before k whose poses lie within ``radius_m`` of T_k (revisits included: a folded trajectory lays
-a corridor's scans over another's, where their echoes contradict each other), and the motion prior
+other scans whose poses lie within ``radius_m`` of T_k, before or after it (revisits included: a folded
+trajectory lays a corridor's scans over another's, where their echoes contradict each other), and the motion prior
 (:mod:`radioslam.slam.motion_prior`) of each step given the one before it and the odometry.
 
 A trajectory the scans cannot support better than the odometry (a corridor nothing fixes) then loses to
@@ -37,8 +40,8 @@ class Source(str, Enum):
     """Where a trajectory hypothesis comes from."""
 
     POSE_GRAPH = "pose graph"
-    FRONT_END = "front end"
     ODOMETRY = "odometry"
+    RIVAL_BRANCH = "rival branch"  # an open fork's rival: the walk after an ambiguous scan taken the other way
 
 
 @dataclass(frozen=True)
@@ -113,14 +116,18 @@ class Judge:
                     and np.all(np.abs(wrap_angle(a[:, 2] - b[:, 2])) <= self.same_rad))
 
     def log_likelihood(self, poses: np.ndarray, scans: dict[int, ScanPoints]) -> float:
-        """Σ_k log p(scan k | T_k, the scans before k within ``radius_m`` of T_k, at most ``max_scans``, nearest)."""
+        """Σ_k log p(scan k | T_k, the other scans within ``radius_m`` of T_k, at most ``max_scans``, nearest): a
+        pseudo-likelihood, each scan against every other that saw its place, before or after it (against the
+        earlier ones only, a front end's chain, greedy in exactly that, beat the loop-corrected trajectory)."""
         estimates = {k: poses[k] for k in scans}
         keys = sorted(scans)
         total = 0.0
-        for i, k in enumerate(keys[1:], start=1):
-            earlier = np.array(keys[:i])
-            distance = np.linalg.norm(poses[earlier, :2] - poses[k, :2], axis=1)
-            near = earlier[np.argsort(distance, kind="stable")[: self.max_scans]]
+        for k in keys:
+            others = np.array([m for m in keys if m != k])
+            if not len(others):
+                continue
+            distance = np.linalg.norm(poses[others, :2] - poses[k, :2], axis=1)
+            near = others[np.argsort(distance, kind="stable")[: self.max_scans]]
             near = sorted(near[np.linalg.norm(poses[near, :2] - poses[k, :2], axis=1) <= self.radius_m].tolist())
             if not near:
                 continue

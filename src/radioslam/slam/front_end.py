@@ -27,11 +27,10 @@ from radioslam.slam.config import FrontEndConfig, GridConfig, MotionConfig, Scan
 from radioslam.slam.correlative import candidate_likelihoods, correlative_match
 from radioslam.slam.degeneracy import DegeneracyTest, remap
 from radioslam.slam.grid import LikelihoodGrid, field_reach
-from radioslam.slam.measurement import scan_log_likelihoods
 from radioslam.slam.motion import Hypothesis, MotionHypothesis, MotionModel, jump_covariance
 from radioslam.slam.refine import fit_scores, refine_poses
 from radioslam.slam.rotation_search import HeadingSearch
-from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points, fused_seen, viewpoints
+from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points
 from radioslam.slam.se2 import between, pose_covariance, wrap_angle
 from radioslam.slam.status import ScanStatus
 
@@ -66,6 +65,23 @@ def fuse(pose: np.ndarray, covariance: np.ndarray, weight: float, prior: np.ndar
     fused[2] = wrap_angle(fused[2])
     fused_cov = prior_covariance @ inner @ covariance  # (I − K)·C/w, without dividing by w
     return fused, 0.5 * (fused_cov + fused_cov.T)
+
+
+def choose(candidates: np.ndarray, scores: np.ndarray, discount: np.ndarray, margin: float, turn_rad: float,
+           trusted: float) -> tuple[int, np.ndarray]:
+    """The candidate (C, 3) a scan is registered at, from its scores (C,) and motion-prior discounts (C,),
+    and the indices of those within ``margin`` of the best discounted score (the scan cannot tell them
+    apart): among those the motion decides (the smallest discount), unless the scan itself explains a
+    candidate turned ≥ ``turn_rad`` from that choice clearly better (its own score beyond the margin of
+    the choice's, and ``trusted`` at least): then the turn is seen in the scan, and its discount already
+    holds the motion (not counted twice), so the best discounted of those is taken."""
+    adjusted = scores * (1.0 - discount)
+    best = adjusted.max()
+    close = np.flatnonzero(adjusted >= best - margin * abs(best))  # the best is always among them, whatever its sign
+    chosen = int(close[np.argmin(discount[close])])
+    turned = close[np.abs(wrap_angle(candidates[close, 2] - candidates[chosen, 2])) >= turn_rad]
+    seen = turned[(scores[turned] * (1.0 - margin) > scores[chosen]) & (scores[turned] >= trusted)]
+    return (int(seen[np.argmax(adjusted[seen])]) if len(seen) else chosen), close
 
 
 class FrontEnd:
@@ -118,12 +134,18 @@ class FrontEnd:
         # cells must not lose to one that happens to sit on the lattice
         candidates = refine_poses(grid, xy, phi, candidates, self.grid_cfg.resolution_m, self.step_rad)
         scores = fit_scores(grid, xy, phi, candidates)
-        # each candidate's log posterior: the scan's log-likelihood at it and the motion prior of its step
-        posterior = scan_log_likelihoods(grid, xy, phi, points.observation_weights, candidates) + \
-            self.motion.prior(k, last).log_prob(np.array([between(last, c) for c in candidates]))
-        chosen = int(np.argmax(posterior))
-        # rivals: the candidates whose posterior odds against the choice are better than 1 : rival_odds
-        alike = np.setdiff1d(np.flatnonzero(posterior >= posterior[chosen] - np.log(cfg.rival_odds)), [chosen])
+        discount = self._prior_discount(candidates, hypotheses)
+        # the motion decides what the scan cannot tell apart, and no more
+        chosen, close = choose(candidates, scores, discount, cfg.ambiguity_margin, np.radians(cfg.distinct_deg),
+                               cfg.min_match_score + cfg.trust_ramp)
+        # the motion's own choice among the candidates the scan supports (trusted scores)
+        supported = np.flatnonzero(scores >= cfg.min_match_score + cfg.trust_ramp)
+        by_motion = int(supported[np.argmin(discount[supported])]) if len(supported) else chosen
+        turned = abs(wrap_angle(candidates[chosen, 2] - candidates[by_motion, 2])) >= np.radians(cfg.distinct_deg)
+        # rivals: what the scan alone cannot tell from the choice (within the margin of its score, or above);
+        # those the motion could not tell apart either (``close``) widen the covariance
+        alike = np.setdiff1d(np.flatnonzero(scores >= (1.0 - cfg.ambiguity_margin) * scores[chosen]), [chosen])
+        rivals, undecided = candidates[alike], candidates[np.intersect1d(alike, close)]
         pose, score = candidates[chosen], float(scores[chosen])
         contradicted = float(np.mean(candidate_likelihoods(grid, xy, phi, pose, np.zeros(1), np.zeros(1, int)) < 0))
         # the response surface around it gives the covariance (Olson 2009 §IV)
@@ -135,15 +157,14 @@ class FrontEnd:
                         note=f"match score {score:.2f} < {cfg.min_match_score:.2f}", contradicted=contradicted)
         weak = self.degeneracy.matched_weak(grid, pose, xy, phi, cov)
         if weak is not None:  # candidates that only slide along the weak direction are not rivals
-            alike = alike[self._across(candidates[alike], pose, weak)]
+            rivals, undecided = (self._across(r, pose, weak) for r in (rivals, undecided))
         status, note = ScanStatus.MATCHED, ""
         if weak is not None:
             # a direction the match made weak itself: the walls facing along it agree elsewhere on it
             pose, cov, weak, note = self._settle(grid, pose, cov, points, weak)
         # a slide the walls facing along it tell apart is no rival (the others' points land alike)
-        alike = alike[~self.degeneracy.told_apart(grid, pose, xy, phi, candidates[alike], cfg.ambiguity_margin,
-                                                  np.radians(cfg.distinct_deg))]
-        rivals = candidates[alike]
+        rivals, undecided = (r[~self.degeneracy.told_apart(grid, pose, xy, phi, r, cfg.ambiguity_margin,
+                                                           np.radians(cfg.distinct_deg))] for r in (rivals, undecided))
         if weak is not None:
             # a direction the walls cannot fix keeps the paced prediction there (Zhang et al. 2016)
             pose, cov = remap(pose, cov, self.motion.paced(primary, last), weak, self.motion_cfg.predicted_sigma_m)
@@ -152,15 +173,33 @@ class FrontEnd:
                     f"{np.degrees(np.arctan2(weak[1], weak[0])):.0f}° (predicted instead)")
         if len(rivals):
             status = ScanStatus.AMBIGUOUS
-            odds = float(np.exp(posterior[chosen] - posterior[alike].max()))
-            note = "; ".join(filter(None, [note, f"ambiguous: {len(rivals)} other pose(s) at odds of 1 : {odds:.1f} "
-                                                 "or better"]))
-            # neither the scan nor the motion can decide: widen the covariance over the rivals, each by its
-            # posterior probability among them and the choice
-            share = np.exp(posterior[alike] - posterior[chosen])
-            spread = rivals - pose
+            note = "; ".join(filter(None, [note, f"ambiguous: {len(rivals)} other pose(s) score within "
+                                                 f"{cfg.ambiguity_margin:.0%}"]))
+        if len(undecided):
+            # neither the scan nor the motion can decide: widen the covariance over the poses left
+            spread = undecided - pose
             spread[:, 2] = wrap_angle(spread[:, 2])
-            cov = cov + (spread * (share / (1.0 + share.sum()))[:, None]).T @ spread
+            cov = cov + spread.T @ spread / len(undecided)
+        if turned and not np.any(np.all(np.isclose(rivals, candidates[by_motion]), axis=1)):
+            # the scan took a pose turned from the motion's choice: that stays a rival for the map to decide
+            # (a corridor folded back onto itself explains a corner's scan better than the corner does,
+            # whose new walls the map has not seen yet), and so does the prediction's own fit, where the
+            # candidates, ranked against the turned one, missed it (a corner's clutter)
+            rivals = self._with_prediction_fit(np.vstack([rivals, candidates[by_motion]]), grid, xy, phi, primary)
+            status = ScanStatus.AMBIGUOUS
+            turn = np.degrees(wrap_angle(pose[2] - candidates[by_motion, 2]))
+            note = "; ".join(filter(None, [note, f"turned {turn:.0f}° from the motion's choice, which stays a rival"]))
+        elif (jump := float(np.linalg.norm(pose[:2] - last[:2]))) > self.motion_cfg.max_step_m:
+            # a pose no step reaches (the search window's corners lie beyond max_step_m), with no candidate near
+            # the motion left to compare (each scored below trust, or none kept): the prediction's own fit stays
+            # a rival where it is turned from the pose taken (a fork's rival: narrow-corridor's fourth corner,
+            # folded 1.6 m away, when 1 µm of range kept the motion's candidate out of branch and bound's list,
+            # and with it the fork)
+            widened = self._with_prediction_fit(rivals, grid, xy, phi, primary)
+            if len(widened) > len(rivals) and abs(wrap_angle(widened[-1, 2] - pose[2])) >= np.radians(cfg.distinct_deg):
+                rivals, status = widened, ScanStatus.AMBIGUOUS
+                note = "; ".join(filter(None, [note, f"{jump:.2f} m from the last pose, beyond a step: the "
+                                                     "prediction's fit stays a rival"]))
         if weight < 1.0:
             pose, cov = fuse(pose, cov, weight, primary, self.predicted)
             if abs(wrap_angle(primary[2] - pose[2])) >= np.radians(cfg.distinct_deg):
@@ -192,11 +231,12 @@ class FrontEnd:
         return settled, settled_cov, None, note
 
     def _contenders(self, candidates: np.ndarray, scores: np.ndarray, adjusted: np.ndarray) -> np.ndarray:
-        """The distinct candidates (C, 3; lattice ``scores`` (C,) and the search's discounted ones ``adjusted``)
-        whose posteriors are compared, to be refined: the best ``refined_candidates`` by discounted score
-        (branch and bound's order: the motion's picks), and those the scan itself explains clearly better
-        than all of them (their own score beyond the ambiguity margin of theirs) whose discounted score is
-        within the margin of the best: a turn the scan shows, however the search's discount ranks it."""
+        """The distinct candidates (C, 3; lattice ``scores`` (C,) and the motion prior's ``adjusted`` ones) that
+        :func:`choose` may pick, to be refined: the best ``refined_candidates`` by discounted score (branch
+        and bound's order: the motion's picks), and those the scan itself explains clearly better than all
+        of them (their own score beyond the ambiguity margin of theirs) whose discounted score is within
+        the margin of the best: a turn seen in the scan, which ``choose`` takes whatever its discount. A
+        U-turn ranked fifth by discounted score (hall-random-13, ranges moved by 1 µm) was never seen."""
         cfg = self.cfg
         radius_m, radius_rad, count = cfg.distinct_m, np.radians(cfg.distinct_deg), cfg.refined_candidates
         by_motion, motion_scores = distinct(candidates, scores, radius_m, radius_rad, count)
@@ -208,18 +248,27 @@ class FrontEnd:
         merged, _ = distinct(both, np.zeros(len(both)), radius_m, radius_rad, 2 * count)
         return merged
 
+    def _with_prediction_fit(self, rivals: np.ndarray, grid: LikelihoodGrid, xy: np.ndarray, phi: np.ndarray,
+                             primary: np.ndarray) -> np.ndarray:
+        """``rivals`` (R, 3) and the scan's own fit near the motion's prediction ``primary`` (within
+        ``distinct_m``), unless a rival lies within ``distinct_m`` of it already."""
+        fitted = correlative_match(grid, xy, phi, primary, self.cfg.distinct_m, np.radians(self.cfg.window_deg),
+                                   self.step_rad).pose
+        if len(rivals) and np.min(np.linalg.norm(rivals[:, :2] - fitted[:2], axis=1)) <= self.cfg.distinct_m:
+            return rivals
+        return np.vstack([rivals, fitted])
+
     def _across(self, rivals: np.ndarray, pose: np.ndarray, weak: np.ndarray) -> np.ndarray:
-        """Which rivals (R,) differ from ``pose`` other than by sliding along the weak direction."""
+        """The rivals that differ from ``pose`` other than by sliding along the weak direction."""
         d = rivals[:, :2] - pose[:2]
         across = d - np.outer(d @ weak, weak)
-        return (np.linalg.norm(across, axis=1) > self.cfg.distinct_m) | \
-            (np.abs(wrap_angle(rivals[:, 2] - pose[2])) > np.radians(self.cfg.distinct_deg))
+        return rivals[(np.linalg.norm(across, axis=1) > self.cfg.distinct_m)
+                      | (np.abs(wrap_angle(rivals[:, 2] - pose[2])) > np.radians(self.cfg.distinct_deg))]
 
     def _prior_discount(self, candidates: np.ndarray, hypotheses: list[Hypothesis]) -> np.ndarray:
-        """The search's ranking (branch and bound prunes and orders by it; the choice is the posterior's): a
-        fraction (C,) of each candidate's score, ``motion_prior`` times its turn from the nearest hypothesis'
-        heading in half turns, plus, once the motion is known, ``translation_prior`` times its distance
-        from the primary hypothesis per ``max_step_m``."""
+        """The motion prior as a fraction (C,) of each candidate's score: ``motion_prior`` times its
+        turn from the nearest hypothesis' heading in half turns, plus, once the motion is known,
+        ``translation_prior`` times its distance from the primary hypothesis per ``max_step_m``."""
         cfg = self.cfg
         turn = np.min(np.abs(wrap_angle(candidates[:, 2][:, None] - [h.pose[2] for h in hypotheses])), axis=1)
         discount = cfg.motion_prior * turn / np.pi
@@ -238,9 +287,7 @@ class FrontEnd:
         free = fused_free(keys, estimates, self.points)
         margin = field_reach(g.sigma_m, g.resolution_m, g.plane_reach_m)
         grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, normals,
-                                          np.radians(g.normal_sigma_deg), g.plane_reach_m, free, g.free_penalty,
-                                          fused_seen(keys, estimates, self.points))
-        grid = replace(grid, viewpoints=viewpoints(keys, estimates, self.points))
+                                          np.radians(g.normal_sigma_deg), g.plane_reach_m, free, g.free_penalty)
         return grid, normals
 
     def local_map_keys(self, estimates: dict[int, np.ndarray]) -> list[int]:

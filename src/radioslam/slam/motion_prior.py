@@ -53,13 +53,15 @@ class PlatformModel:
 # widths per scan at walking pace (0.3–1 m a scan). A robot holds its course: its speed changes by a
 # decimetre a scan and it turns with its path (the shared buildings' tours: ≤ 60° at a corner, 4σ: the
 # tail's 0.1 % takes the sharpest). A person sways a hand-width and turns 30° a scan. Anything else (the
-# default; the generated suite's motions: corners turned, 30° turns on the spot and U-turns in one scan,
-# 1–2 % of its steps turning more than 90°): 0.3 m either way, 45° (a quarter turn costs 2 nats, e² ≈ 7 : 1,
-# within the odds a scan can overturn), and 2 % of steps unexpected (a half turn: ≈ 6.4 nats, 600 : 1).
+# default; the generated suite's motions: corners turned in one scan, heading held while the path turns,
+# 30° turns on the spot and U-turns in one scan, 1–2 % of its steps turning more than 90°): half a metre
+# either way (a walk's direction may change by a right angle in one scan), 45° (a quarter turn costs 2
+# nats, e² ≈ 7 : 1, within the odds a scan can overturn), and 2 % of steps unexpected (a half turn: ≈ 7
+# nats).
 PLATFORMS = {
     Platform.ROBOT: PlatformModel(along_m=0.1, across_m=0.05, turn_rad=np.radians(15.0), surprise=1e-3),
     Platform.HANDHELD: PlatformModel(along_m=0.25, across_m=0.15, turn_rad=np.radians(30.0), surprise=1e-2),
-    Platform.UNKNOWN: PlatformModel(along_m=0.3, across_m=0.3, turn_rad=np.radians(45.0), surprise=2e-2),
+    Platform.UNKNOWN: PlatformModel(along_m=0.5, across_m=0.5, turn_rad=np.radians(45.0), surprise=2e-2),
 }
 
 

@@ -185,14 +185,16 @@ class SlamSession:
         return self._ending(result) if cfg.ending.enabled else result
 
     def _ending(self, result: SlamResult) -> SlamResult:
-        """The result with the best of the pose graph's, the front end's and the odometry's trajectories, and
-        the runner-up when its odds are within the stated ones (a warning naming the cause)."""
+        """The result with the best of the pose graph's trajectory, the odometry's and the rival branches of the
+        forks still open, and the runner-up when its odds are within the stated ones (a warning naming the
+        cause)."""
         tick = time.perf_counter()
         motion = self.front_end.motion
-        candidates = [(Source.POSE_GRAPH, result.poses), (Source.FRONT_END, result.odometry)]
+        candidates = [(Source.POSE_GRAPH, result.poses)]
         odometry = odometry_in_map_frame(motion.odometry, result.poses[0]) if motion.odometry is not None else None
         if odometry is not None:
             candidates.append((Source.ODOMETRY, odometry))
+        candidates += [(Source.RIVAL_BRANCH, branch) for branch in self.forks.branches(result.poses)]
         ending = Judge.from_config(self.cfg).judge(candidates, self.loop_closer.points, motion)
         best, runner_up = ending.best, ending.runner_up
         lines = []
