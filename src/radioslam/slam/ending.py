@@ -8,18 +8,18 @@ hypothesis here: it is greedy in exactly this likelihood (each scan placed on it
 the loop-corrected trajectory on it where the latter was ten times closer to the truth (docs/notes.md,
 session 28). Two that agree (every pose within ``same_m`` and ``same_deg``) are one. Each trajectory T scores
 
-    log p(T | scans, u) = Σ_k log p(scan k | T_k, map of the other scans near T_k)
+    log p(T | scans, u) = Σ_k log p(scan k | T_k, map of the scans before k near T_k)
                         + Σ_k log p(step k | motion, odometry)
 
 with the front end's measurement model (:mod:`radioslam.slam.measurement`: each specular arc one
 observation, unseen space at the prior of a surface, seen-through space contradicting) against the
-other scans whose poses lie within ``radius_m`` of T_k, before or after it (revisits included: a folded
-trajectory lays a corridor's scans over another's, where their echoes contradict each other), and the motion prior
+scans before k whose poses lie within ``radius_m`` of T_k (revisits included: a folded trajectory lays
+a corridor's scans over another's, where their echoes contradict each other), and the motion prior
 (:mod:`radioslam.slam.motion_prior`) of each step given the one before it and the odometry.
 
 A trajectory the scans cannot support better than the odometry (a corridor nothing fixes) then loses to
-the odometry; a pose graph that a wrong loop bent loses to its own front end; and when the runner-up's
-odds are better than 1 : ``odds``, the run says so (``ambiguous_trajectory``) and keeps the alternative.
+the odometry; and when the runner-up's odds are better than 1 : ``odds`` (a rival branch: it is never the
+answer, see :class:`Ending`), the run says so (``ambiguous_trajectory``) and keeps the alternative.
 """
 
 from __future__ import annotations
@@ -58,25 +58,34 @@ class Hypothesis:
 
 @dataclass(frozen=True)
 class Ending:
-    """The hypotheses, best first, and whether the runner-up is within the stated odds of the best."""
+    """The hypotheses, best first; the answer and its runner-up, and whether the runner-up is within the
+    stated odds of the answer.
+
+    The answer is the best of the pose graph's and the odometry's trajectories. A rival branch is never the
+    answer, only a runner-up: these odds are not calibrated well enough to carry a walk onto a turned twin
+    (on the look-alike rooms the best-scoring rival was the wrong one in 3 of 6 runs, docs/notes.md,
+    session 28), but they are evidence enough that the answer may be wrong: a rival that scores better than
+    the answer, or within the odds, makes the trajectory ambiguous."""
 
     hypotheses: list[Hypothesis]
     odds: float  # the ambiguity threshold: 1 : odds
 
     @property
     def best(self) -> Hypothesis:
-        return self.hypotheses[0]
+        """The answer."""
+        return next(h for h in self.hypotheses if h.source is not Source.RIVAL_BRANCH)
 
     @property
     def runner_up(self) -> Hypothesis | None:
-        return self.hypotheses[1] if len(self.hypotheses) > 1 else None
+        """The best hypothesis other than the answer."""
+        return next((h for h in self.hypotheses if h is not self.best), None)
 
     @property
     def runner_up_odds(self) -> float:
-        """p(best) / p(runner-up) (inf: none)."""
+        """p(answer) / p(runner-up) (inf: none; below 1 where a rival branch scores better)."""
         if self.runner_up is None:
             return float("inf")
-        return float(np.exp(min(self.best.log_posterior - self.runner_up.log_posterior, 700.0)))
+        return float(np.exp(np.clip(self.best.log_posterior - self.runner_up.log_posterior, -700.0, 700.0)))
 
     @property
     def ambiguous(self) -> bool:
@@ -116,18 +125,16 @@ class Judge:
                     and np.all(np.abs(wrap_angle(a[:, 2] - b[:, 2])) <= self.same_rad))
 
     def log_likelihood(self, poses: np.ndarray, scans: dict[int, ScanPoints]) -> float:
-        """Σ_k log p(scan k | T_k, the other scans within ``radius_m`` of T_k, at most ``max_scans``, nearest): a
-        pseudo-likelihood, each scan against every other that saw its place, before or after it (against the
-        earlier ones only, a front end's chain, greedy in exactly that, beat the loop-corrected trajectory)."""
+        """Σ_k log p(scan k | T_k, the scans before k within ``radius_m`` of T_k, at most ``max_scans``, nearest):
+        each scan judged by the map from before it, never by the scans that follow it on its own branch (a
+        wrong branch agrees with itself)."""
         estimates = {k: poses[k] for k in scans}
         keys = sorted(scans)
         total = 0.0
-        for k in keys:
-            others = np.array([m for m in keys if m != k])
-            if not len(others):
-                continue
-            distance = np.linalg.norm(poses[others, :2] - poses[k, :2], axis=1)
-            near = others[np.argsort(distance, kind="stable")[: self.max_scans]]
+        for i, k in enumerate(keys[1:], start=1):
+            earlier = np.array(keys[:i])
+            distance = np.linalg.norm(poses[earlier, :2] - poses[k, :2], axis=1)
+            near = earlier[np.argsort(distance, kind="stable")[: self.max_scans]]
             near = sorted(near[np.linalg.norm(poses[near, :2] - poses[k, :2], axis=1) <= self.radius_m].tolist())
             if not near:
                 continue
@@ -184,6 +191,7 @@ def ambiguity_warning(best: Hypothesis, runner_up: Hypothesis, odds: float, stat
         causes.append("scans with too few echoes (open space, or nothing within range)")
     why = "; ".join(causes) or "the scans explain both about as well"
     helps = "a slower walk past the places where they part" if odometry else "odometry or a gyro (--odometry)"
-    return (f"ambiguous trajectory: the {runner_up.source.value}'s is within odds of 1 : {odds:.3g} of the "
-            f"{best.source.value}'s answer ({span} differ): {why}; it is written as trajectory_alternative.tum; "
-            f"what would help: {helps}")
+    standing = (f"is within odds of 1 : {odds:.3g} of" if odds >= 1 else
+                f"scores {1 / odds:.3g} : 1 over")
+    return (f"ambiguous trajectory: the {runner_up.source.value}'s {standing} the {best.source.value}'s answer "
+            f"({span} differ): {why}; it is written as trajectory_alternative.tum; what would help: {helps}")

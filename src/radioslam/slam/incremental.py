@@ -20,6 +20,10 @@ class IncrementalSmoother:
         params = gtsam.ISAM2Params()
         params.setRelinearizeThreshold(relinearize_threshold)
         params.relinearizeSkip = 1
+        # QR, not Cholesky: a relocalized scan's step carries next to no information (100 m, 180°) beside
+        # steps of centimetres, and a loop across it made the normal equations indeterminate for Cholesky
+        # (a generated office, issue #47); QR factors the Jacobian itself, its condition number not squared
+        params.setFactorization("QR")
         self.isam = gtsam.ISAM2(params)
         self.iterations = iterations  # at most this many extra Gauss–Newton steps after a loop
         self.pending = gtsam.NonlinearFactorGraph()
