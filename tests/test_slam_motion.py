@@ -274,13 +274,13 @@ def test_strict_turns_a_lost_stretch_into_exit_3(demo_run, tmp_path):
 
 
 def test_an_ambiguous_trajectory_is_said_written_and_strict_about(demo_run, tmp_path):
-    """With the ending told to keep the pose graph's and the front end's trajectories apart (no merging) and
-    to call any runner-up close, the demo's walk ends ambiguous: one warning line naming the runner-up and
-    trajectory_alternative.tum, ``ambiguous_trajectory`` true in slam.json and metrics.json, and --strict
-    exits with status 3."""
+    """With an odometry given and the ending told to keep it apart from the pose graph's trajectory (no
+    merging) and to call any runner-up close, the demo's walk ends ambiguous: one warning line naming the
+    runner-up and trajectory_alternative.tum, ``ambiguous_trajectory`` true in slam.json and metrics.json,
+    and --strict exits with status 3."""
     import shutil
 
-    from radioslam.io.tum import read_tum
+    from radioslam.io.tum import read_tum, write_tum
 
     out, _ = demo_run
     run = tmp_path / "ambiguous"
@@ -290,12 +290,15 @@ def test_an_ambiguous_trajectory_is_said_written_and_strict_about(demo_run, tmp_
     shutil.copytree(out / "scans", run / "scans")
     config = tmp_path / "config.yaml"
     config.write_text("slam: {ending: {same_m: 1.0e-9, same_deg: 1.0e-9, odds: 1.0e300}}\n")
-    done = _cli("slam", str(run), "--config", str(config), "--strict")
+    stamps, truth = read_tum(out / "ground_truth.tum")
+    drift = truth + np.column_stack([0.01 * np.arange(len(truth)), np.zeros(len(truth)), np.zeros(len(truth))])
+    write_tum(tmp_path / "odometry.tum", stamps, drift)
+    done = _cli("slam", str(run), "--config", str(config), "--strict", "--odometry", str(tmp_path / "odometry.tum"))
     assert done.returncode == 3, done.stderr
     assert "ambiguous trajectory (--strict)" in done.stderr
     assert sum(line.startswith("radioslam: warning: ambiguous trajectory") for line in done.stderr.splitlines()) == 1
     doc = json.loads((run / "slam.json").read_text())
-    assert doc["ambiguous_trajectory"] is True and doc["alternative"]["source"] in ("front end", "pose graph")
+    assert doc["ambiguous_trajectory"] is True and doc["alternative"]["source"] in ("odometry", "pose graph")
     _, alternative = read_tum(run / "trajectory_alternative.tum")
     _, answer = read_tum(run / "trajectory.tum")
     assert alternative.shape == answer.shape and not np.allclose(alternative, answer)

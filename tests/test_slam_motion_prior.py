@@ -23,11 +23,12 @@ def _grid_mass(prior: MotionPrior, half_m: float, n: int = 52, turns: int = 72) 
 
 @pytest.mark.parametrize("platform", list(Platform))
 def test_the_step_density_integrates_to_one(platform):
-    """A density over the searched window (x, y within ±max_step_m, any θ): the Gaussians' mass and the
-    uniform's sum to 1, but for the Gaussians' tails beyond the window."""
+    """A density over steps: the Gaussians' mass (ℝ², a few σ) and the unexpected's (the searched window,
+    ±max_step_m) sum to 1; over the window alone, all but the Gaussians' tails beyond it."""
     steps = np.array([[0.5, 0.0, 0.1], [0.0, 0.0, 0.0]])
     prior = MotionPrior.of(steps, PLATFORMS[platform], max_step_m=1.3)
-    assert _grid_mass(prior, 1.3) == pytest.approx(1.0, abs=0.03)
+    assert _grid_mass(prior, 3.5, n=140) == pytest.approx(1.0, abs=0.02)
+    assert 0.9 < _grid_mass(prior, 1.3) <= 1.0
 
 
 def test_a_half_turn_is_possible_but_never_free():

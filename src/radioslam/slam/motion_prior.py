@@ -18,8 +18,8 @@ expects (a robust prior in the sense of Olson & Agarwal's max-mixtures, RSS 2012
 - With rotation-only odometry (a gyro: the turn measured, the translation unknown) each hypothesis
   keeps its translation at the platform's width and takes the gyro's turn at the gyro's noise.
 
-Every value here is a probability or a physical quantity per step; ``log_prob`` is normalized over
-the searched window (up to the Gaussians' mass beyond it and beyond ±π: a few per cent at most).
+Every value here is a probability or a physical quantity per step; ``log_prob`` is a density over
+ℝ² × (−π, π] (up to the Gaussians' mass beyond ±π), the unexpected's share over the searched window only.
 """
 
 from __future__ import annotations
@@ -114,5 +114,6 @@ class MotionPrior:
         gauss = np.log(self.weights) + log_norm - 0.5 * z2  # (C, H)
         peak = gauss.max(axis=1, keepdims=True)
         mixture = peak[:, 0] + np.log(np.sum(np.exp(gauss - peak), axis=1))
-        uniform = -np.log((2 * self.max_step_m) ** 2 * 2 * np.pi)
+        inside = np.all(np.abs(steps[:, :2]) <= self.max_step_m, axis=1)  # the searched window
+        uniform = np.where(inside, -np.log((2 * self.max_step_m) ** 2 * 2 * np.pi), -np.inf)
         return np.logaddexp(np.log1p(-self.surprise) + mixture, np.log(self.surprise) + uniform)
