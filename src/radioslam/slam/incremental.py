@@ -20,11 +20,9 @@ class IncrementalSmoother:
         params = gtsam.ISAM2Params()
         params.setRelinearizeThreshold(relinearize_threshold)
         params.relinearizeSkip = 1
-        # QR, not Cholesky: a relocalized scan's step carries next to no information (100 m, 180°) beside
-        # steps of centimetres, and a loop across it made the normal equations indeterminate for Cholesky
-        # (a generated office, issue #47); QR factors the Jacobian itself, its condition number not squared
-        params.setFactorization("QR")
+        self.params = params
         self.isam = gtsam.ISAM2(params)
+        self.factors, self.values = gtsam.NonlinearFactorGraph(), gtsam.Values()  # all it was given, for a refactoring
         self.iterations = iterations  # at most this many extra Gauss–Newton steps after a loop
         self.pending = gtsam.NonlinearFactorGraph()
         self.pending_values = gtsam.Values()
@@ -41,10 +39,36 @@ class IncrementalSmoother:
             self.loops[loop_index] = factor
 
     def update(self) -> None:
-        """The pending poses and factors into the Bayes tree (one Gauss–Newton step)."""
+        """The pending poses and factors into the Bayes tree (one Gauss–Newton step). Should Cholesky find the
+        normal equations indeterminate (a relocalized scan's step carries next to no information, 100 m and
+        180°, beside steps of centimetres, and a loop across it squares that condition number: a generated
+        office, issue #47), the tree is built again from everything given so far by QR, which factors the
+        Jacobian itself; the smoother stays on QR."""
         if self.pending.size() or self.pending_values.size():
-            self.isam.update(self.pending, self.pending_values)
+            try:
+                self.isam.update(self.pending, self.pending_values)
+            except RuntimeError:
+                self._refactor(self.pending, self.pending_values)
+            else:
+                self.factors.push_back(self.pending)
+                self.values.insert(self.pending_values)
             self.pending, self.pending_values = gtsam.NonlinearFactorGraph(), gtsam.Values()
+
+    def _step(self) -> gtsam.ISAM2Result:
+        """One more Gauss–Newton step of the tree (refactored by QR should Cholesky fail)."""
+        try:
+            return self.isam.update()
+        except RuntimeError:
+            self._refactor(gtsam.NonlinearFactorGraph(), gtsam.Values())
+            return self.isam.update()
+
+    def _refactor(self, factors: gtsam.NonlinearFactorGraph, values: gtsam.Values) -> None:
+        """The tree built again by QR from everything given, with ``factors`` and ``values`` added."""
+        self.params.setFactorization("QR")
+        self.isam = gtsam.ISAM2(self.params)
+        self.factors.push_back(factors)
+        self.values.insert(values)
+        self.isam.update(self.factors, self.values)
 
     def solve(self) -> np.ndarray:
         """(P, 3) poses by key (0 … P − 1) once the pending factors are in and the relinearized steps
@@ -53,7 +77,7 @@ class IncrementalSmoother:
         they were linearized). The estimate is read once, at the end: reading it costs O(P)."""
         self.update()
         for _ in range(self.iterations):
-            if not self.isam.update().getVariablesRelinearized():
+            if not self._step().getVariablesRelinearized():
                 break
         self.solution = self.isam.calculateEstimate()
         return gtsam.utilities.extractPose2(self.solution)
