@@ -183,6 +183,16 @@ def test_scan_statuses_and_tracking_lost_are_recorded(demo_run):
     assert metrics["map_points_occupied"] >= 0.9 and metrics["map_points_free"] <= 0.02
 
 
+def _copy_scans(out, run) -> None:
+    """A run directory at ``run`` holding ``out``'s scene, ground truth and scans: what 'slam' reads."""
+    import shutil
+
+    run.mkdir()
+    for name in ("scene.yaml", "ground_truth.tum"):
+        shutil.copyfile(out / name, run / name)
+    shutil.copytree(out / "scans", run / "scans")
+
+
 def _cli(*args):
     import subprocess
     import sys
@@ -250,17 +260,13 @@ def test_config_file_sets_the_slam_and_bad_keys_are_one_line(demo_run, tmp_path)
 
 
 def test_strict_turns_a_lost_stretch_into_exit_3(demo_run, tmp_path):
-    import shutil
 
     from radioslam.io import write_scan
     from radioslam.sensing.pointcloud import Scan
 
     out, _ = demo_run
     run = tmp_path / "lost"
-    run.mkdir()
-    for name in ("scene.yaml", "ground_truth.tum"):
-        shutil.copyfile(out / name, run / name)
-    shutil.copytree(out / "scans", run / "scans")
+    _copy_scans(out, run)
     gen = np.random.default_rng(3)
     for k in (20, 21, 22):  # three scans of no wall in the map: a lost stretch
         far = gen.uniform(-5, 5, (60, 2)) + [40.0, 0.0]
@@ -278,16 +284,12 @@ def test_an_ambiguous_trajectory_is_said_written_and_strict_about(demo_run, tmp_
     merging) and to call any runner-up close, the demo's walk ends ambiguous: one warning line naming the
     runner-up and trajectory_alternative.tum, ``ambiguous_trajectory`` true in slam.json and metrics.json,
     and --strict exits with status 3."""
-    import shutil
 
     from radioslam.io.tum import read_tum, write_tum
 
     out, _ = demo_run
     run = tmp_path / "ambiguous"
-    run.mkdir()
-    for name in ("scene.yaml", "ground_truth.tum"):
-        shutil.copyfile(out / name, run / name)
-    shutil.copytree(out / "scans", run / "scans")
+    _copy_scans(out, run)
     config = tmp_path / "config.yaml"
     config.write_text("slam: {ending: {same_m: 1.0e-9, same_deg: 1.0e-9, odds: 1.0e300}}\n")
     stamps, truth = read_tum(out / "ground_truth.tum")

@@ -22,32 +22,40 @@ def write_tum(path: str | Path, timestamps: np.ndarray, poses: np.ndarray) -> No
     atomic_write_text(path, "# timestamp x y z qx qy qz qw\n" + lines + "\n")
 
 
-def read_tum(path: str | Path, unknown_translation: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """Read a TUM file: timestamps (P,) and SE(2) poses (P, 3), yaw from the quaternion. With
-    ``unknown_translation`` a file whose x and y are ``nan`` on every line (a gyro's odometry) is read too."""
-    path = Path(path)
+def _numeric_rows(path: Path, count: int, split, names: str, nan_columns: slice = slice(0, 0)) -> np.ndarray:
+    """The rows (N, ``count``) of a text file of numbers, ``split`` cutting a line into fields; blank lines,
+    ``#`` comments and a first line starting with ``names``' first word skipped. NaN is allowed only in
+    ``nan_columns``, infinity nowhere; any other line is a :class:`TumError` naming it."""
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise TumError("no such file", file=path, field="(file)") from None
-    rows = []
+    header, rows = names.split()[0].lower(), []
     for number, line in enumerate(text.splitlines(), start=1):
-        if not line.strip() or line.lstrip().startswith("#"):
+        fields = [f.strip() for f in split(line)]
+        if not line.strip() or line.lstrip().startswith("#") or (not rows and fields[0].lower() == header):
             continue
-        fields = line.split()
-        if len(fields) != 8:
-            raise TumError(f"expected 8 numbers, got {len(fields)}", file=path, field=f"line {number}")
+        if len(fields) != count:
+            raise TumError(f"expected {count} numbers ({names}), got {len(fields)}", file=path, field=f"line {number}")
         try:
-            values = [float(v) for v in fields]
+            values = np.array([float(v) for v in fields])
         except ValueError:
             raise TumError("not a number", file=path, field=f"line {number}") from None
-        known = values[:1] + values[3:] if unknown_translation else values
+        known = np.delete(values, np.arange(count)[nan_columns])
         if not np.all(np.isfinite(known)) or np.any(np.isinf(values)):
             raise TumError("NaN or infinite value", file=path, field=f"line {number}")
         rows.append(values)
-    if not rows:
+    return np.array(rows).reshape(-1, count)
+
+
+def read_tum(path: str | Path, unknown_translation: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Read a TUM file: timestamps (P,) and SE(2) poses (P, 3), yaw from the quaternion. With
+    ``unknown_translation`` a file whose x and y are ``nan`` on every line (a gyro's odometry) is read too."""
+    path = Path(path)
+    data = _numeric_rows(path, 8, str.split, "timestamp x y z qx qy qz qw",
+                         slice(1, 3) if unknown_translation else slice(0, 0))
+    if not len(data):
         raise TumError("no poses", file=path, field="(file)")
-    data = np.array(rows)
     if unknown_translation and np.isnan(data[:, 1:3]).any() and not np.isnan(data[:, 1:3]).all():
         raise TumError("x and y must be nan on every line (a gyro's odometry) or on none", file=path, field="x, y")
     qx, qy, qz, qw = data[:, 4:8].T
@@ -59,27 +67,9 @@ def read_angular_rate(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """An IMU's angular rate about z: a CSV of ``timestamp,wz`` (s, rad/s) per line, ``#`` comments and a
     header line of names allowed. Returns timestamps (N,) increasing and rates (N,)."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise TumError("no such file", file=path, field="(file)") from None
-    rows = []
-    for number, line in enumerate(text.splitlines(), start=1):
-        fields = [f.strip() for f in line.split(",")]
-        if not line.strip() or line.lstrip().startswith("#") or (not rows and fields[0].lower() == "timestamp"):
-            continue
-        if len(fields) != 2:
-            raise TumError(f"expected 2 numbers (timestamp, wz), got {len(fields)}", file=path, field=f"line {number}")
-        try:
-            values = [float(v) for v in fields]
-        except ValueError:
-            raise TumError("not a number", file=path, field=f"line {number}") from None
-        if not np.all(np.isfinite(values)):
-            raise TumError("NaN or infinite value", file=path, field=f"line {number}")
-        rows.append(values)
-    if len(rows) < 2:
+    data = _numeric_rows(path, 2, lambda line: line.split(","), "timestamp wz")
+    if len(data) < 2:
         raise TumError("fewer than 2 samples", file=path, field="(file)")
-    data = np.array(rows)
     if np.any(np.diff(data[:, 0]) <= 0):
         raise TumError("timestamps must increase", file=path, field="timestamp")
     return data[:, 0], data[:, 1]
