@@ -205,7 +205,7 @@ def summary(rows: list[dict]) -> str:
                      f"{np.median([r['ms_per_scan'] for r in sub]):.1f}")
     given = [r for r in ran if r["odometry_given"]]
     if given:
-        worse = [r["case"] for r in given if r["ate_m"] > r["ate_given_odometry_m"]]
+        worse = [r["case"] for r in given if r["ate_m"] > r["ate_given_odometry_m"] + 1e-6]  # beyond rounding
         lines.append(f"with odometry: worse than the odometry given in {len(worse)}/{len(given)} {worse}")
     lines += [f"pose graph worse than its front end by > 1 cm: "
               f"{[r['case'] for r in ran if r['ate_m'] > r['ate_front_end_m'] + 0.01]}",
