@@ -5,6 +5,7 @@ within 6 m (no occlusion), which is all the measurement model needs."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from radioslam.slam.config import SlamConfig
 from radioslam.slam.ending import Judge, Source, odometry_in_map_frame
@@ -118,3 +119,28 @@ def test_odometry_wins_where_the_scans_cannot_tell_and_the_slam_turned_without_c
     candidates = [(Source.POSE_GRAPH, _in_frame(slid)), (Source.ODOMETRY, odometry_in_map_frame(odometry, np.zeros(3)))]
     ending = _judge().judge(candidates, scans, _motion(odometry))
     assert ending.best.source is Source.ODOMETRY and not ending.ambiguous
+
+
+def test_the_smoother_refactors_by_qr_where_cholesky_finds_the_system_indeterminate():
+    """A step carrying next to no information (σ 100 m and rad, a relocalized scan's) beside a prior of 0.1 mm:
+    iSAM2's Cholesky calls the system indeterminate (office-tour-7010 crashed so, issue #47). The smoother
+    builds its tree again by QR from everything given and solves: the loop fixes the pose it ties."""
+    import gtsam
+
+    from radioslam.slam.incremental import IncrementalSmoother
+
+    smoother = IncrementalSmoother()
+    tight, loose = (gtsam.noiseModel.Diagonal.Sigmas(np.array(s)) for s in ([0.02, 0.02, 0.005], [100.0] * 3))
+    smoother.add_pose(0, gtsam.Pose2(0, 0, 0))
+    smoother.add_factor(gtsam.PriorFactorPose2(0, gtsam.Pose2(0, 0, 0),
+                                               gtsam.noiseModel.Diagonal.Sigmas(np.array([1e-4, 1e-4, 1e-5]))))
+    smoother.add_pose(1, gtsam.Pose2(1, 0, 0))
+    smoother.add_factor(gtsam.BetweenFactorPose2(0, 1, gtsam.Pose2(1, 0, 0), loose))
+    smoother.add_pose(2, gtsam.Pose2(2, 0, 0))
+    smoother.add_factor(gtsam.BetweenFactorPose2(1, 2, gtsam.Pose2(1, 0, 0), tight))
+    assert smoother.params.getFactorization() == "CHOLESKY"
+    smoother.update()
+    smoother.add_factor(gtsam.BetweenFactorPose2(0, 2, gtsam.Pose2(2, 0.1, 0), tight))  # the loop
+    poses = smoother.solve()
+    assert smoother.params.getFactorization() == "QR"
+    assert poses[2] == pytest.approx([2.0, 0.1, 0.0], abs=1e-6)
