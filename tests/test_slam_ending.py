@@ -9,7 +9,6 @@ import pytest
 
 from radioslam.slam.config import SlamConfig
 from radioslam.slam.ending import Judge, Source, odometry_in_map_frame
-from radioslam.slam.free_space import seen_samples
 from radioslam.slam.motion import MotionModel
 from radioslam.slam.scan_points import ScanPoints
 from radioslam.slam.se2 import between, compose, inverse, transform_points
@@ -32,8 +31,7 @@ def _scans(segments: np.ndarray, poses: np.ndarray) -> dict[int, ScanPoints]:
         local = [w[np.linalg.norm(w, axis=1) <= 6.0] for w in local]
         weights = np.concatenate([np.full(len(w), 1.0 / max(len(w), 1)) for w in local])
         xy = np.concatenate(local)
-        scans[k] = ScanPoints(xy, np.full(len(xy), np.nan), np.zeros((0, 2)), weights=weights,
-                              seen=seen_samples(xy, 0.2))
+        scans[k] = ScanPoints(xy, np.full(len(xy), np.nan), np.zeros((0, 2)), weights=weights)
     return scans
 
 

@@ -4,8 +4,8 @@ cannot tell apart.
 
 - rooms: a rectangle with a point-symmetric pair of obstacles (alike under a half turn), a square
   with four pillars turned by quarter turns (alike under a quarter turn), an isosceles trapezoid
-  with a mirrored pair (alike under a mirror); each with or without one asymmetric feature (a box
-  off every symmetry), which is what tells the twins apart when it is in view;
+  with a mirrored pair (alike under a mirror); each with or without one asymmetric feature (a pillar
+  standing out of one wall, off every symmetry), which is what tells the twins apart when it is in view;
 - walks: a figure eight (a lemniscate of Bernoulli, turning ≤ 21° a step: its crossing is where a
   half-turned twin is nearest), a four-leaf clover (a rose r = a·cos 2φ through the centre), and the inset loop
   walked smoothly; heading along the path, 0.4–0.6 m a step.
@@ -88,8 +88,8 @@ def walk_curve(motion: MotionKind, extent: np.ndarray, rng: np.random.Generator)
 
 def lookalike_case(symmetry: Symmetry, motion: MotionKind, seed: int, asymmetric: bool,
                    snr_db: float | None = None, clearance: float | None = None, max_poses: int = 90) -> Case:
-    """One reproducible case in a room alike under ``symmetry``; ``asymmetric`` adds one box off
-    every symmetry. Everything not given is drawn from ``default_rng(seed)``."""
+    """One reproducible case in a room alike under ``symmetry``; ``asymmetric`` adds a pillar out of one
+    wall, off every symmetry. Everything not given is drawn from ``default_rng(seed)``."""
     rng = np.random.default_rng(seed)
     snr = float(rng.uniform(0, 20)) if snr_db is None else float(snr_db)
     clear = float(rng.uniform(0.5, 2.0)) if clearance is None else float(clearance)
@@ -131,30 +131,18 @@ def lookalike_case(symmetry: Symmetry, motion: MotionKind, seed: int, asymmetric
 
 def _symmetric_obstacles(symmetry: Symmetry, segments: np.ndarray, walk: np.ndarray, clearance: float,
                          rng: np.random.Generator) -> list[tuple[np.ndarray, str]]:
-    """One obstacle and its images under the symmetry (so the room stays alike), clear of the walk."""
-    return _boxes(segments, [], walk, clearance, rng, symmetry, pair=True)
-
-
-def _boxes(segments: np.ndarray, placed: list, walk: np.ndarray, clearance: float, rng: np.random.Generator,
-           symmetry: Symmetry, pair: bool) -> list[tuple[np.ndarray, str]]:
-    """A box (with its symmetry images when ``pair``) of one material, ≥ ``clearance`` from the walk and
-    0.5 m from the walls and the obstacles ``placed``; none where no place is found in 200 draws."""
+    """A box of one material and its images under the symmetry (so the room stays alike), ≥ ``clearance``
+    from the walk and 0.5 m from the walls; none where no place is found in 200 draws."""
     lo, hi = segments.reshape(-1, 2).min(axis=0), segments.reshape(-1, 2).max(axis=0)
-    others = _segments([p for p, _ in placed]) if placed else np.zeros((0, 2, 2))
     material = str(rng.choice(["concrete", "metal", "wood"]))
     for _ in range(200):
         w, h = rng.uniform(0.4, 1.2, 2)
         box = _rotate(np.array([[-w, -h], [w, -h], [w, h], [-w, h], [-w, -h]]) / 2, rng.uniform(0, np.pi / 2))
-        box = box + rng.uniform(lo, hi)
-        polys = images(box, symmetry) if pair else [box]
-        seg = _segments(polys)
-        if point_segment_distance(walk, seg).min() < clearance + 0.3:
+        polys = images(box + rng.uniform(lo, hi), symmetry)
+        if point_segment_distance(walk, _segments(polys)).min() < clearance + 0.3:
             continue
         corners = np.concatenate(polys)
-        if point_segment_distance(corners, segments).min() < 0.5 or \
-                (len(others) and point_segment_distance(corners, others).min() < 0.5):
-            continue
-        if not all(_inside(c, segments) for c in corners):
+        if point_segment_distance(corners, segments).min() < 0.5 or not all(_inside(c, segments) for c in corners):
             continue
         return [(p, material) for p in polys]
     return []

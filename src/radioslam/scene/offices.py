@@ -68,17 +68,14 @@ def office_case(seed: int, snr_db: float | None = None, step_m: float = 0.5, max
             waypoints += [[x, 0.0], [x, inside[1]], [x, 0.0]]
     waypoints += [[length - 1.0, 0.0], [1.0, 0.0]]
     poses = waypoint_poses(np.array(waypoints), step_m, 60.0, 0.3)[:max_poses]
-    segments = _segments([w for w, _ in walls])
-    clearance = point_segment_distance(poses[:, :2], segments).min(axis=1)
-    walls += _furniture(north[3] + south[3], segments, poses[:, :2], rng)
+    walls += _furniture(north[3] + south[3], _segments([w for w, _ in walls]), poses[:, :2], rng)
     name = f"office-tour-{seed}"
     scene = scene_from_mapping({
         "version": 1, "name": name,
         "walls": [{"points": np.round(w, 6).tolist(), "material": m} for w, m in walls],
         "trajectory": {"poses": np.round(poses, 6).tolist()},
         "radio": {"snr_db": round(snr, 3)},
-    }, f"office:{name}")
-    assert clearance.min() >= 0.2, f"{name}: a pose {clearance.min():.2f} m from a wall"
+    }, f"office:{name}")  # the scene's own check refuses a pose within 0.2 m of a wall
     return Case(RoomKind.OFFICE, MotionKind.TOUR, seed, snr, step_m, scene)
 
 

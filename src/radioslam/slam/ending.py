@@ -29,11 +29,13 @@ from enum import Enum
 
 import numpy as np
 
-from radioslam.slam.grid import LikelihoodGrid, field_reach
+from radioslam.slam.config import GridConfig
 from radioslam.slam.measurement import scan_log_likelihoods
 from radioslam.slam.motion import MotionModel
-from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points, fused_seen, viewpoints
+from radioslam.slam.result import scan_ranges
+from radioslam.slam.scan_points import ScanPoints, map_grid
 from radioslam.slam.se2 import between, compose, inverse, wrap_angle
+from radioslam.slam.status import ScanStatus
 
 
 class Source(str, Enum):
@@ -91,23 +93,25 @@ class Ending:
     def ambiguous(self) -> bool:
         return self.runner_up_odds < self.odds
 
+    def odds_over(self, source: Source) -> float:
+        """p(answer) / p(the hypothesis from ``source``) (1 where it was merged into the answer)."""
+        other = next((h for h in self.hypotheses if h.source is source), self.best)
+        return float(np.exp(np.clip(self.best.log_posterior - other.log_posterior, -700.0, 700.0)))
+
 
 class Judge:
-    """Built from plain values: the likelihood grid's settings, the neighbourhood of a scan's map, when two
+    """Built from the likelihood grid's settings and plain values: the neighbourhood of a scan's map, when two
     trajectories are one, and the stated odds."""
 
-    def __init__(self, resolution_m: float, sigma_m: float, normal_sigma_rad: float, plane_reach_m: float,
-                 free_penalty: float, radius_m: float, max_scans: int, same_m: float, same_rad: float, odds: float):
-        self.resolution_m, self.sigma_m, self.normal_sigma_rad = resolution_m, sigma_m, normal_sigma_rad
-        self.plane_reach_m, self.free_penalty = plane_reach_m, free_penalty
-        self.radius_m, self.max_scans = radius_m, max_scans
+    def __init__(self, grid: GridConfig, radius_m: float, max_scans: int, same_m: float, same_rad: float,
+                 odds: float):
+        self.grid, self.radius_m, self.max_scans = grid, radius_m, max_scans
         self.same_m, self.same_rad, self.odds = same_m, same_rad, odds
 
     @classmethod
     def from_config(cls, cfg) -> "Judge":
-        g, e = cfg.grid, cfg.ending
-        return cls(g.resolution_m, g.sigma_m, np.radians(g.normal_sigma_deg), g.plane_reach_m, g.free_penalty,
-                   e.radius_m, e.max_scans, e.same_m, np.radians(e.same_deg), e.odds)
+        e = cfg.ending
+        return cls(cfg.grid, e.radius_m, e.max_scans, e.same_m, np.radians(e.same_deg), e.odds)
 
     def judge(self, candidates: list[tuple[Source, np.ndarray]], scans: dict[int, ScanPoints],
               motion: MotionModel) -> Ending:
@@ -138,14 +142,7 @@ class Judge:
             near = sorted(near[np.linalg.norm(poses[near, :2] - poses[k, :2], axis=1) <= self.radius_m].tolist())
             if not near:
                 continue
-            xy, normals = fused_points(near, estimates, scans, np.zeros(3))
-            if not len(xy):
-                continue
-            grid = LikelihoodGrid.from_points(
-                xy, self.resolution_m, self.sigma_m, field_reach(self.sigma_m, self.resolution_m, self.plane_reach_m),
-                normals, self.normal_sigma_rad, self.plane_reach_m, fused_free(near, estimates, scans),
-                self.free_penalty, fused_seen(near, estimates, scans))
-            grid = replace(grid, viewpoints=viewpoints(near, estimates, scans))
+            grid, _ = map_grid(near, estimates, scans, self.grid, observed=True)
             points = scans[k]
             total += float(scan_log_likelihoods(grid, points.xy, points.normals, points.observation_weights,
                                                 poses[k])[0])
@@ -155,9 +152,7 @@ class Judge:
 def log_prior(poses: np.ndarray, motion: MotionModel) -> float:
     """Σ_k log p(step k) of the motion prior, each step's hypotheses those of the trajectory's own last step
     (and the odometry's step k)."""
-    total, model = 0.0, MotionModel(motion.pace_scans, motion.straight_rad, motion.odometry,
-                                     platform=motion.platform, max_step_m=motion.max_step_m,
-                                     odometry_sigmas=motion.odometry_sigmas)
+    total, model = 0.0, replace(motion, velocity=None, speeds=[])  # the walk's motion model, from its start
     for k in range(1, len(poses)):
         step = between(poses[k - 1], poses[k])
         total += float(model.prior(k, poses[k - 1]).log_prob(step[None])[0])
@@ -175,9 +170,6 @@ def odometry_in_map_frame(odometry: np.ndarray, first_pose: np.ndarray) -> np.nd
 
 def ambiguity_warning(best: Hypothesis, runner_up: Hypothesis, odds: float, status: list, odometry: bool) -> str:
     """One line: the two trajectories, their odds, where they part, why the scans cannot decide, what would help."""
-    from radioslam.slam.result import scan_ranges
-    from radioslam.slam.status import ScanStatus
-
     apart = np.flatnonzero((np.linalg.norm(best.poses[:, :2] - runner_up.poses[:, :2], axis=1) > 0.2)
                            | (np.abs(wrap_angle(best.poses[:, 2] - runner_up.poses[:, 2])) > np.radians(5.0)))
     span = f"scans {scan_ranges(apart.tolist())}" if len(apart) else "every scan within 0.2 m and 5°"

@@ -26,11 +26,11 @@ from radioslam.slam.branch_bound import BranchAndBound, distinct
 from radioslam.slam.config import FrontEndConfig, GridConfig, MotionConfig, ScanConfig
 from radioslam.slam.correlative import candidate_likelihoods, correlative_match
 from radioslam.slam.degeneracy import DegeneracyTest, remap
-from radioslam.slam.grid import LikelihoodGrid, field_reach
+from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.motion import Hypothesis, MotionHypothesis, MotionModel, jump_covariance
 from radioslam.slam.refine import fit_scores, refine_poses
 from radioslam.slam.rotation_search import HeadingSearch
-from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points
+from radioslam.slam.scan_points import ScanPoints, map_grid
 from radioslam.slam.se2 import between, pose_covariance, wrap_angle
 from radioslam.slam.status import ScanStatus
 
@@ -281,14 +281,7 @@ class FrontEnd:
     def _local_grid(self, estimates: dict[int, np.ndarray]) -> tuple[LikelihoodGrid, np.ndarray]:
         """The likelihood field of the local map's scans at their latest poses (world frame), and the
         map points' world normals."""
-        keys = self.local_map_keys(estimates)
-        xy, normals = fused_points(keys, estimates, self.points, np.zeros(3))
-        g = self.grid_cfg
-        free = fused_free(keys, estimates, self.points)
-        margin = field_reach(g.sigma_m, g.resolution_m, g.plane_reach_m)
-        grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, normals,
-                                          np.radians(g.normal_sigma_deg), g.plane_reach_m, free, g.free_penalty)
-        return grid, normals
+        return map_grid(self.local_map_keys(estimates), estimates, self.points, self.grid_cfg)
 
     def local_map_keys(self, estimates: dict[int, np.ndarray]) -> list[int]:
         """The latest ``local_map_scans`` scans, and up to ``nearby_scans`` older ones taken within

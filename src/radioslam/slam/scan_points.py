@@ -4,7 +4,7 @@ of the arc each came from (:mod:`radioslam.slam.normals`), and the free space th
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -12,6 +12,7 @@ import numpy as np
 from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.config import GridConfig, ScanConfig
 from radioslam.slam.free_space import free_samples, seen_samples
+from radioslam.slam.grid import LikelihoodGrid, field_reach
 from radioslam.slam.normals import echo_weights, specular_arcs, wall_points
 from radioslam.slam.se2 import between, transform_points
 
@@ -25,7 +26,12 @@ class ScanPoints:
     free: np.ndarray  # (F, 2) terminal-frame samples of the space the scan saw through
     sightings: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (A, 2) bearing, range of each arc's wall
     weights: np.ndarray | None = None  # (P,) each point's share of one independent observation; None: 1 each
-    seen: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))  # (S, 2) samples of the space it observed
+
+    @property
+    def seen(self) -> np.ndarray:
+        """(S, 2) samples of the space the scan observed (derived from its points when asked: only the
+        measurement model reads them, and a long walk need not keep them)."""
+        return seen_samples(self.xy, SEEN_SPACING_M)
 
     @cached_property
     def observation_weights(self) -> np.ndarray:
@@ -48,8 +54,7 @@ def prepare_points(scan: Scan, cfg: ScanConfig, grid: GridConfig) -> ScanPoints:
     phi, sightings = specular_arcs(scan, cfg.arc_range_m, np.radians(cfg.seam_gap_deg))
     xy = wall_points(scan, phi) if cfg.project_arcs else scan.xy
     return ScanPoints(xy, phi, free_samples(xy, phi, grid.free_stop_m, grid.free_pose_radius_m,
-                                            grid.resolution_m / 2), sightings, echo_weights(scan, cfg.arc_range_m),
-                      seen_samples(xy, SEEN_SPACING_M))
+                                            grid.resolution_m / 2), sightings, echo_weights(scan, cfg.arc_range_m))
 
 
 def fused_points(keys: list[int], poses: dict[int, np.ndarray], scans: dict[int, ScanPoints],
@@ -78,3 +83,19 @@ def _in_world(keys: list[int], poses: dict[int, np.ndarray], samples: list[np.nd
 def viewpoints(keys: list[int], poses: dict[int, np.ndarray], scans: dict[int, ScanPoints]) -> np.ndarray:
     """(J, 3) each scan's world position and reach (its farthest echo or free sample)."""
     return np.array([[poses[k][0], poses[k][1], scans[k].reach] for k in keys]).reshape(-1, 3)
+
+
+def map_grid(keys: list[int], poses: dict[int, np.ndarray], scans: dict[int, ScanPoints], g: GridConfig,
+             observed: bool = False) -> tuple[LikelihoodGrid, np.ndarray]:
+    """The likelihood field of the scans ``keys`` at ``poses`` (world frame), with their free space, and the
+    map points' world normals; ``observed``: also the space they observed and their viewpoints (what the
+    measurement model, :mod:`radioslam.slam.measurement`, tells unseen space by)."""
+    xy, normals = fused_points(keys, poses, scans, np.zeros(3))
+    grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, field_reach(g.sigma_m, g.resolution_m,
+                                                                                 g.plane_reach_m),
+                                      normals, np.radians(g.normal_sigma_deg), g.plane_reach_m,
+                                      fused_free(keys, poses, scans), g.free_penalty,
+                                      fused_seen(keys, poses, scans) if observed else None)
+    if observed:
+        grid = replace(grid, viewpoints=viewpoints(keys, poses, scans))
+    return grid, normals

@@ -200,10 +200,10 @@ class SlamSession:
         lines = []
         if best.source is not Source.POSE_GRAPH:
             lines.append(f"the {best.source.value}'s trajectory explains the scans and the motion better than the "
-                            f"pose graph's (odds {_odds(best, ending.hypotheses)}): it is the answer")
+                         f"pose graph's (odds {ending.odds_over(Source.POSE_GRAPH):.3g} : 1): it is the answer")
         if ending.ambiguous:
             lines.append(ambiguity_warning(best, runner_up, ending.runner_up_odds, result.status,
-                                              motion.odometry is not None))
+                                           motion.odometry is not None))
         return replace(result, poses=best.poses, source=best.source.value, warnings=result.warnings + lines,
                        ending_lines=lines,
                        ambiguous_trajectory=ending.ambiguous,
@@ -238,7 +238,3 @@ class Contradiction:
     def better(self, score: float, step: Step) -> bool:
         return self.suspicious(step) and score >= (1.0 + self.gain) * step.score
 
-
-def _odds(best, hypotheses) -> str:
-    pose_graph = next(h for h in hypotheses if h.source is Source.POSE_GRAPH)
-    return f"{np.exp(min(best.log_posterior - pose_graph.log_posterior, 700.0)):.3g} : 1"
