@@ -122,3 +122,33 @@ def test_a_simulated_gyro_measures_the_turns_only():
     gyro = simulated_odometry(truth, spec, odometry_rng(3))
     assert np.isnan(gyro[:, :2]).all()
     assert gyro[:, 2] - truth[:, 2] == pytest.approx(np.radians(0.1) * np.arange(20), abs=1e-9)
+
+
+def test_a_scans_clear_line_across_a_mapped_wall_costs_one_observation():
+    """A specular echo at 3 m straight ahead says the 3 m in between are clear: against a map of that wall
+    alone the line costs nothing; a mapped wall across it at 1.5 m costs the floor (one observation, however
+    many samples cross it); turned away from that wall the line is clear again. The scan's log-likelihood is
+    the points' and the lines' terms at the calibrated scale."""
+    from radioslam.slam.grid import LikelihoodGrid
+    from radioslam.slam.measurement import (
+        LOG_FLOOR,
+        TEMPERATURE,
+        line_log_likelihoods,
+        point_terms,
+        scan_log_likelihoods,
+    )
+
+    y = np.linspace(-2.0, 2.0, 81)
+    far = np.stack([np.full_like(y, 3.0), y], axis=1)
+    near = np.stack([np.full_like(y, 1.5), y], axis=1)
+    sighting = np.array([[0.0, 3.0]])  # bearing 0, range 3 m
+    poses = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, np.pi / 2]])
+    clear = LikelihoodGrid.from_points(far, 0.05, 0.05, 1.0, np.zeros(len(far)))
+    crossed = LikelihoodGrid.from_points(np.vstack([far, near]), 0.05, 0.05, 1.0, np.zeros(2 * len(far)))
+    assert line_log_likelihoods(clear, sighting, poses, stop=0.3) == pytest.approx([0.0, 0.0], abs=1e-6)
+    assert line_log_likelihoods(crossed, sighting, poses, stop=0.3) == pytest.approx([LOG_FLOOR, 0.0], abs=1e-3)
+    points, normals, weights = np.array([[3.0, 0.0]]), np.zeros(1), np.ones(1)
+    total = scan_log_likelihoods(crossed, points, normals, weights, poses, sighting, 0.3)
+    expected = TEMPERATURE * (point_terms(crossed, points, normals, weights, poses)
+                              + line_log_likelihoods(crossed, sighting, poses, 0.3))
+    assert total == pytest.approx(expected) and total[0] < TEMPERATURE * (LOG_FLOOR + 0.5)

@@ -12,7 +12,8 @@ session 28). Two that agree (every pose within ``same_m`` and ``same_deg``) are 
                         + Σ_k log p(step k | motion, odometry)
 
 with the front end's measurement model (:mod:`radioslam.slam.measurement`: each specular arc one
-observation, unseen space at the prior of a surface, seen-through space contradicting) against the
+observation, unseen space at the prior of a surface, seen-through space contradicting, and so a scan's
+own clear lines across mapped walls) against the
 scans before k whose poses lie within ``radius_m`` of T_k (revisits included: a folded trajectory lays
 a corridor's scans over another's, where their echoes contradict each other), and the motion prior
 (:mod:`radioslam.slam.motion_prior`) of each step given the one before it and the odometry.
@@ -145,7 +146,7 @@ class Judge:
             grid, _ = map_grid(near, estimates, scans, self.grid, observed=True)
             points = scans[k]
             total += float(scan_log_likelihoods(grid, points.xy, points.normals, points.observation_weights,
-                                                poses[k])[0])
+                                                poses[k], points.sightings, self.grid.free_stop_m)[0])
         return total
 
 

@@ -20,6 +20,21 @@ The points of one specular arc are one echo of one surface seen through adjacent
 are one measurement, their bearings the beams' pointing): counted as independent they would be
 over-confident by the arc's length, so each point weighs 1/n of its arc's n
 (:func:`radioslam.slam.normals.echo_weights`): the scan's evidence is that of its independent echoes.
+
+The scan's own beams count too (a beam that sees through a mapped wall): a specular echo at range r
+along bearing φ says that the line from the terminal to its wall's foot is clear (the echo's path went
+there and back). Where the pose lays that line across a surface the map holds, one of the two is wrong:
+each sighting's line, up to ``stop`` short of its foot (the free space's stop, :mod:`radioslam.slam.free_space`),
+scores log(1 − (1 − floor)·q), q the map's largest likelihood value on it (the probability that a mapped
+surface stands there), one observation per sighting (:func:`line_log_likelihoods`). A twin that lays the
+scan's walls over the map's explains its points, and is caught by the lines it draws through them.
+
+Calibration (``benchmarks/bench_measurement.py``, docs/notes.md session 29): over 3,100 scans of the
+benchmark's four families, the true pose's mode against the distinct rivals branch and bound finds within
+one step (truth-posed local maps), the log loss of the true pose is lowest with the log-likelihoods scaled
+by ``TEMPERATURE``: the raw sums are somewhat over-confident (each echo is not fully independent of its
+neighbours: one wall seen by two orientations' beams, a corner's two arcs), and scaled they compare as
+likelihood ratios.
 """
 
 from __future__ import annotations
@@ -34,6 +49,8 @@ LOG_FLOOR = float(np.log(LIKELIHOOD_FLOOR))
 # walls met within about 30° of their normal (docs/architecture.md, § Echo model)
 DETECTABLE_INCIDENCE = np.radians(30.0)
 COS_DETECTABLE = float(np.cos(DETECTABLE_INCIDENCE))
+# the log-likelihoods' scale that minimizes the true pose's log loss among its rivals (benchmarks/bench_measurement.py)
+TEMPERATURE = 0.6
 
 
 def point_log_likelihoods(values: np.ndarray, unseen: np.ndarray | bool = False, neutral: float = 0.0) -> np.ndarray:
@@ -44,10 +61,18 @@ def point_log_likelihoods(values: np.ndarray, unseen: np.ndarray | bool = False,
 
 
 def scan_log_likelihoods(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, weights: np.ndarray,
-                         poses: np.ndarray) -> np.ndarray:
+                         poses: np.ndarray, sightings: np.ndarray | None = None, stop: float = 0.0) -> np.ndarray:
     """log p(scan | pose, map) (C,) at each of ``poses`` (C, 3), up to a constant shared by every pose:
-    the weighted sum of the points' terms on the interpolated field."""
+    the weighted sum of the points' terms on the interpolated field, plus the terms of the ``sightings``'
+    (A, 2: bearing, range) clear lines (:func:`line_log_likelihoods`), times ``TEMPERATURE``."""
     poses = np.atleast_2d(np.asarray(poses, dtype=np.float64))
+    lines = 0.0 if sightings is None else line_log_likelihoods(grid, sightings, poses, stop)
+    return TEMPERATURE * (point_terms(grid, points, normals, weights, poses) + lines)
+
+
+def point_terms(grid: LikelihoodGrid, points: np.ndarray, normals: np.ndarray, weights: np.ndarray,
+                poses: np.ndarray) -> np.ndarray:
+    """The points' share (C,) of the log-likelihood, unscaled: their terms on the interpolated field, weighted."""
     residual, _ = fit_terms(grid, points, normals, poses)
     unseen = False
     if grid.seen is not None:
@@ -59,6 +84,26 @@ def scan_log_likelihoods(grid: LikelihoodGrid, points: np.ndarray, normals: np.n
         if grid.viewpoints is not None and len(grid.viewpoints):
             unseen = np.where(np.isnan(normals), unseen, ~faced(world, poses[:, 2:3] + normals, grid.viewpoints))
     return point_log_likelihoods(1.0 - residual, unseen, grid.neutral) @ weights
+
+
+def line_log_likelihoods(grid: LikelihoodGrid, sightings: np.ndarray, poses: np.ndarray, stop: float) -> np.ndarray:
+    """Σ_a log(1 − (1 − floor)·q_a) (C,) at each of ``poses`` (C, 3): q_a the largest point-field value
+    (the likelihood of a mapped surface there) on sighting a's line from the terminal along its bearing to
+    ``stop`` short of its range, sampled every half cell; a line that ends before it starts is its
+    terminal alone."""
+    if not len(sightings):
+        return np.zeros(len(poses))
+    phi, reach = sightings[:, 0], np.maximum(sightings[:, 1] - stop, 0.0)
+    count = np.ceil(reach / (grid.resolution / 2)).astype(np.int64) + 1  # both ends sampled
+    line = np.repeat(np.arange(len(phi)), count)
+    first = np.cumsum(count) - count
+    along = np.minimum((np.arange(count.sum()) - np.repeat(first, count)) * (grid.resolution / 2), reach[line])
+    heading = poses[:, 2:3] + phi[line]
+    world = np.stack([poses[:, 0:1] + along * np.cos(heading), poses[:, 1:2] + along * np.sin(heading)], axis=-1)
+    cells = grid.cells(world)
+    surface = np.maximum(grid.values[cells[..., 0], cells[..., 1]], 0.0)  # (C, S); free space holds none
+    q = np.maximum.reduceat(surface, first, axis=1)  # (C, A) each line's largest
+    return np.log1p(-(1.0 - LIKELIHOOD_FLOOR) * q).sum(axis=1)
 
 
 def faced(world: np.ndarray, bearing: np.ndarray, viewpoints: np.ndarray) -> np.ndarray:
