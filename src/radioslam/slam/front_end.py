@@ -7,7 +7,8 @@ that the rotation comes from the scan itself: the candidates of the global rotat
 (:mod:`radioslam.slam.rotation_search`) and the motion model's hypotheses (standing still,
 constant velocity, the last turn repeated, odometry) are all searched, each over every
 translation within ``max_step_m`` of the last pose, by one branch-and-bound search
-(Hess et al. 2016 §V). Distinct candidates within ``ambiguity_margin`` of the best make
+(Hess et al. 2016 §V); with full odometry, only the Gaussian core of its step (±3σ of its
+stated noise). Distinct candidates within ``ambiguity_margin`` of the best make
 the scan ambiguous: the one nearest the motion is taken, its covariance widened over the others,
 unless the scan shows a turned one clearly better (:func:`choose`). The winner's response
 surface gives the covariance (Olson 2009 §IV) and a least-squares fit refines it. A direction
@@ -33,6 +34,9 @@ from radioslam.slam.rotation_search import HeadingSearch
 from radioslam.slam.scan_points import ScanPoints, map_grid
 from radioslam.slam.se2 import between, pose_covariance, wrap_angle
 from radioslam.slam.status import ScanStatus
+
+# with full odometry the front end searches its step's Gaussian core: ±3σ in each axis holds 99.7 % of it
+ODOMETRY_CORE_SIGMAS = 3.0
 
 
 @dataclass(frozen=True)
@@ -122,9 +126,9 @@ class FrontEnd:
         hypotheses = self.motion.hypotheses(k, last)
         primary = hypotheses[0].pose
         # every heading the scan's normals or the motion suggest, over every translation within a step
-        headings = self.heading_search.headings(phi, map_normals, [h.pose[2] for h in hypotheses])
+        centre, window, headings = self._search_region(phi, map_normals, hypotheses, last)
         found = BranchAndBound(grid, self.grid_cfg.branch_levels).search(
-            xy, phi, last[:2], headings, self.motion_cfg.max_step_m, 0.0,
+            xy, phi, centre, headings, window, 0.0,
             1.0 - cfg.ambiguity_margin - cfg.lattice_allowance, lambda poses: self._prior_discount(poses, hypotheses),
             np.array([h.pose for h in hypotheses]))
         if found.pose is None:
@@ -210,6 +214,21 @@ class FrontEnd:
                                                      f"{np.degrees(wrap_angle(pose[2] - primary[2])):.0f}° from the "
                                                      "motion's prediction, which stays a rival"]))
         return Step(pose, cov, status, score, rivals, note, contradicted)
+
+    def _search_region(self, phi: np.ndarray, map_normals: np.ndarray, hypotheses: list[Hypothesis],
+                       last: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+        """Where the scan is searched: the centre (2,), the half width of the square window and the headings (A,).
+        With full odometry, its step's Gaussian core: ``ODOMETRY_CORE_SIGMAS`` of its per-step σ around it in
+        each axis (the motion prior's mass lies there; a step beyond it is the prior's unexpected share, left to
+        relocalization when the scan then matches nothing). Otherwise every translation within ``max_step_m`` of
+        the last pose, at every heading the scan's normals or the motion's hypotheses suggest."""
+        primary = hypotheses[0]
+        if primary.kind is MotionHypothesis.ODOMETRY and not self.motion.gyro_only:
+            reach = ODOMETRY_CORE_SIGMAS * self.motion.odometry_sigmas
+            turns = np.arange(-reach[2], reach[2] + 1e-12, self.step_rad)
+            return primary.pose[:2], float(reach[0]), wrap_angle(primary.pose[2] + turns)
+        headings = self.heading_search.headings(phi, map_normals, [h.pose[2] for h in hypotheses])
+        return last[:2], self.motion_cfg.max_step_m, headings
 
     def _settle(self, grid: LikelihoodGrid, pose: np.ndarray, cov: np.ndarray, points: ScanPoints,
                 weak: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, str]:
