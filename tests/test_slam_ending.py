@@ -73,6 +73,24 @@ def test_a_folded_trajectory_loses_to_the_true_one():
     assert not ending.ambiguous and ending.runner_up_odds > 1e3
 
 
+def test_a_branch_scores_its_shared_prefix_once_and_alike():
+    """A scan's term depends on the poses up to its own alone: a rival branch that begins as the answer
+    reuses the answer's terms for those scans, and every term equals a fresh scoring of it; where they
+    part, the branch's terms are its own (the folded walk's scans after its fold score worse)."""
+    segments = _room([[0, 0], [12, 0], [12, 5], [5, 5], [5, 10], [0, 10]])
+    x, y = np.linspace(2, 10, 12), np.full(12, 2.0)
+    truth = _in_frame(np.column_stack([x, y, np.zeros(12)]))
+    scans = _scans(segments, np.column_stack([x, y, np.zeros(12)]))
+    folded = truth.copy()
+    jump = compose(truth[7], compose(np.array([0.0, 0.0, np.pi]), inverse(truth[7])))
+    folded[8:] = np.array([compose(jump, p) for p in truth[8:]])
+    judge = _judge()
+    answer = judge.scan_terms(truth, scans)
+    reused = judge.scan_terms(folded, scans, [(truth, answer)])
+    assert reused == judge.scan_terms(folded, scans)  # exactly: the same floats
+    assert reused[:7] == answer[:7] and sum(reused[7:]) < sum(answer[7:]) - 5.0
+
+
 def test_trajectories_within_the_merge_radius_are_one_hypothesis():
     segments = _room([[0, 0], [10, 0], [10, 6], [0, 6]])
     poses = np.column_stack([np.linspace(2, 8, 7), np.full(7, 3.0), np.zeros(7)])

@@ -121,33 +121,73 @@ class Judge:
         for source, poses in candidates:
             if not any(self._alike(poses, other) for _, other in kept):
                 kept.append((source, poses))
-        scored = [Hypothesis(source, poses, self.log_likelihood(poses, scans), log_prior(poses, motion))
-                  for source, poses in kept]
-        return Ending(sorted(scored, key=lambda h: -h.log_posterior), self.odds)
+        scored: list[tuple[np.ndarray, list[float]]] = []  # each kept trajectory and its scans' terms
+        for _, poses in kept:
+            scored.append((poses, self.scan_terms(poses, scans, scored)))
+        hypotheses = [Hypothesis(source, poses, sum(terms, 0.0), log_prior(poses, motion))
+                      for (source, poses), (_, terms) in zip(kept, scored)]
+        return Ending(sorted(hypotheses, key=lambda h: -h.log_posterior), self.odds)
+
+    def apart(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """(P,) the poses where two trajectories differ by more than ``same_m`` or ``same_rad``."""
+        return (np.linalg.norm(a[:, :2] - b[:, :2], axis=1) > self.same_m) | \
+            (np.abs(wrap_angle(a[:, 2] - b[:, 2])) > self.same_rad)
 
     def _alike(self, a: np.ndarray, b: np.ndarray) -> bool:
-        return bool(np.all(np.linalg.norm(a[:, :2] - b[:, :2], axis=1) <= self.same_m)
-                    and np.all(np.abs(wrap_angle(a[:, 2] - b[:, 2])) <= self.same_rad))
+        return not self.apart(a, b).any()
 
-    def log_likelihood(self, poses: np.ndarray, scans: dict[int, ScanPoints]) -> float:
-        """Σ_k log p(scan k | T_k, the scans before k within ``radius_m`` of T_k, at most ``max_scans``, nearest):
-        each scan judged by the map from before it, never by the scans that follow it on its own branch (a
-        wrong branch agrees with itself)."""
-        estimates = {k: poses[k] for k in scans}
+    def scan_terms(self, poses: np.ndarray, scans: dict[int, ScanPoints],
+                   scored: list[tuple[np.ndarray, list[float]]] = ()) -> list[float]:
+        """log p(scan k | T_k, the scans before k within ``radius_m`` of T_k, at most ``max_scans``, nearest) for
+        each scan but the first (0 where none is near): each scan judged by the map from before it, never by the
+        scans that follow it on its own branch (a wrong branch agrees with itself). A scan's term depends on the
+        poses up to its own alone: where ``poses`` begin as one of the trajectories ``scored`` (with their terms)
+        does, those scans' terms are its (a rival branch shares the answer's poses up to its fork)."""
         keys = sorted(scans)
-        total = 0.0
+        shared, reused = 0, []
+        for other, terms in scored:
+            differ = np.flatnonzero(np.any(other != poses, axis=1))
+            if (same := int(differ[0]) if len(differ) else len(poses)) > shared:
+                shared, reused = same, terms
+        estimates = {k: poses[k] for k in scans}
+        out = []
         for i, k in enumerate(keys[1:], start=1):
+            if k < shared:
+                out.append(reused[i - 1])
+                continue
             earlier = np.array(keys[:i])
             distance = np.linalg.norm(poses[earlier, :2] - poses[k, :2], axis=1)
             near = earlier[np.argsort(distance, kind="stable")[: self.max_scans]]
             near = sorted(near[np.linalg.norm(poses[near, :2] - poses[k, :2], axis=1) <= self.radius_m].tolist())
             if not near:
+                out.append(0.0)
                 continue
             grid, _ = map_grid(near, estimates, scans, self.grid, observed=True)
             points = scans[k]
-            total += float(scan_log_likelihoods(grid, points.xy, points.normals, points.observation_weights,
-                                                poses[k], points.sightings, self.grid.free_stop_m)[0])
-        return total
+            out.append(float(scan_log_likelihoods(grid, points.xy, points.normals, points.observation_weights,
+                                                  poses[k], points.sightings, self.grid.free_stop_m)[0]))
+        return out
+
+    def warning(self, best: Hypothesis, runner_up: Hypothesis, odds: float, status: list, odometry: bool) -> str:
+        """One line: the two trajectories, their odds, where they part (the scans beyond ``same_m`` or
+        ``same_rad`` of each other: there are some, or they would be one), why the scans cannot decide, and
+        what would help."""
+        apart = np.flatnonzero(self.apart(best.poses, runner_up.poses))
+        there = [status[k] for k in apart]
+        causes = []
+        if ScanStatus.DEGENERATE in there:
+            causes.append("nothing fixes the position along a corridor or wall")
+        if ScanStatus.AMBIGUOUS in there:
+            causes.append("places that look alike under a turn or a shift")
+        if ScanStatus.PREDICTED in there or ScanStatus.SKIPPED in there:
+            causes.append("scans with too few echoes (open space, or nothing within range)")
+        why = "; ".join(causes) or "the scans explain both about as well"
+        helps = "a slower walk past the places where they part" if odometry else "odometry or a gyro (--odometry)"
+        standing = (f"is within odds of 1 : {odds:.3g} of" if odds >= 1 else
+                    f"scores {1 / odds:.3g} : 1 over")
+        return (f"ambiguous trajectory: the {runner_up.source.value}'s {standing} the {best.source.value}'s "
+                f"answer (scans {scan_ranges(apart.tolist())} differ): {why}; it is written as "
+                f"trajectory_alternative.tum; what would help: {helps}")
 
 
 def log_prior(poses: np.ndarray, motion: MotionModel) -> float:
@@ -167,24 +207,3 @@ def odometry_in_map_frame(odometry: np.ndarray, first_pose: np.ndarray) -> np.nd
         return None
     carry = compose(first_pose, inverse(odometry[0]))
     return np.array([compose(carry, pose) for pose in odometry])
-
-
-def ambiguity_warning(best: Hypothesis, runner_up: Hypothesis, odds: float, status: list, odometry: bool) -> str:
-    """One line: the two trajectories, their odds, where they part, why the scans cannot decide, what would help."""
-    apart = np.flatnonzero((np.linalg.norm(best.poses[:, :2] - runner_up.poses[:, :2], axis=1) > 0.2)
-                           | (np.abs(wrap_angle(best.poses[:, 2] - runner_up.poses[:, 2])) > np.radians(5.0)))
-    span = f"scans {scan_ranges(apart.tolist())}" if len(apart) else "every scan within 0.2 m and 5°"
-    there = [status[k] for k in apart] if len(apart) else list(status)
-    causes = []
-    if ScanStatus.DEGENERATE in there:
-        causes.append("nothing fixes the position along a corridor or wall")
-    if ScanStatus.AMBIGUOUS in there:
-        causes.append("places that look alike under a turn or a shift")
-    if ScanStatus.PREDICTED in there or ScanStatus.SKIPPED in there:
-        causes.append("scans with too few echoes (open space, or nothing within range)")
-    why = "; ".join(causes) or "the scans explain both about as well"
-    helps = "a slower walk past the places where they part" if odometry else "odometry or a gyro (--odometry)"
-    standing = (f"is within odds of 1 : {odds:.3g} of" if odds >= 1 else
-                f"scores {1 / odds:.3g} : 1 over")
-    return (f"ambiguous trajectory: the {runner_up.source.value}'s {standing} the {best.source.value}'s answer "
-            f"({span} differ): {why}; it is written as trajectory_alternative.tum; what would help: {helps}")

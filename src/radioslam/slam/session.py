@@ -21,7 +21,7 @@ import numpy as np
 from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.back_end import BackEnd
 from radioslam.slam.config import Anchors, SlamConfig
-from radioslam.slam.ending import Judge, Source, ambiguity_warning, odometry_in_map_frame
+from radioslam.slam.ending import Judge, Source, odometry_in_map_frame
 from radioslam.slam.errors import SlamError
 from radioslam.slam.forks import Decision, Forks
 from radioslam.slam.front_end import FrontEnd, Step
@@ -195,15 +195,16 @@ class SlamSession:
         if odometry is not None:
             candidates.append((Source.ODOMETRY, odometry))
         candidates += [(Source.RIVAL_BRANCH, branch) for branch in self.forks.branches(result.poses)]
-        ending = Judge.from_config(self.cfg).judge(candidates, self.loop_closer.points, motion)
+        judge = Judge.from_config(self.cfg)
+        ending = judge.judge(candidates, self.loop_closer.points, motion)
         best, runner_up = ending.best, ending.runner_up
         lines = []
         if best.source is not Source.POSE_GRAPH:
             lines.append(f"the {best.source.value}'s trajectory explains the scans and the motion better than the "
                          f"pose graph's (odds {ending.odds_over(Source.POSE_GRAPH):.3g} : 1): it is the answer")
         if ending.ambiguous:
-            lines.append(ambiguity_warning(best, runner_up, ending.runner_up_odds, result.status,
-                                           motion.odometry is not None))
+            lines.append(judge.warning(best, runner_up, ending.runner_up_odds, result.status,
+                                       motion.odometry is not None))
         return replace(result, poses=best.poses, source=best.source.value, warnings=result.warnings + lines,
                        ending_lines=lines,
                        ambiguous_trajectory=ending.ambiguous,
