@@ -125,7 +125,8 @@ class FrontEnd:
         grid, map_normals = self._local_grid(estimates)
         hypotheses = self.motion.hypotheses(k, last)
         primary = hypotheses[0].pose
-        # every heading the scan's normals or the motion suggest, over every translation within a step
+        # every heading the scan's normals or the motion suggest over every translation within a step, or with
+        # full odometry its step's Gaussian core
         centre, window, headings = self._search_region(phi, map_normals, hypotheses, last)
         found = BranchAndBound(grid, self.grid_cfg.branch_levels).search(
             xy, phi, centre, headings, window, 0.0,
