@@ -33,6 +33,7 @@ from suites import BenchCase, benchmark_suite
 
 from radioslam.slam import SlamConfig
 from radioslam.slam.branch_bound import BranchAndBound, distinct
+from radioslam.slam.front_end import local_map_keys
 from radioslam.slam.measurement import TEMPERATURE, line_log_likelihoods, point_terms
 from radioslam.slam.motion import MotionModel
 from radioslam.slam.motion_prior import Platform
@@ -45,17 +46,6 @@ CACHE = Path.home() / ".cache" / "radioslam" / "robustness"
 SCALES = np.exp(np.linspace(np.log(0.05), np.log(2.0), 80))
 
 
-def local_map(k: int, truth: np.ndarray, cfg: SlamConfig) -> list[int]:
-    """The front end's local map for scan k (``FrontEnd.local_map_keys``), at the true poses."""
-    f = cfg.front_end
-    recent, older = list(range(max(0, k - f.local_map_scans), k)), np.arange(max(0, k - f.local_map_scans))
-    if len(older) and f.nearby_scans:
-        distance = np.linalg.norm(truth[older, :2] - truth[k - 1, :2], axis=1)
-        near = np.argsort(distance, kind="stable")[: f.nearby_scans]
-        recent = sorted(older[near[distance[near] <= f.nearby_radius_m]].tolist()) + recent
-    return recent
-
-
 def case_terms(case: BenchCase, every: int, cache: Path = CACHE) -> list[tuple]:
     """Per sampled scan: the points' and the lines' log-likelihood terms (C,) of its candidates, which
     of them are the true pose's mode (C,), and each platform's log prior of their steps ({platform: (C,)})."""
@@ -65,7 +55,8 @@ def case_terms(case: BenchCase, every: int, cache: Path = CACHE) -> list[tuple]:
     points = {k: prepare_points(scan, cfg.scan, g) for k, scan in enumerate(sensed_scans(case, cache))}
     estimates, rows = dict(enumerate(truth)), []
     for k in range(3, len(truth), every):
-        p, keys = points[k], [m for m in local_map(k, truth, cfg) if len(points[m]) >= cfg.scan.min_points]
+        matched = [m for m in range(k) if len(points[m]) >= cfg.scan.min_points]  # the front end skips the rest
+        p, keys = points[k], local_map_keys(matched, estimates, f) if matched else []
         if len(p) < cfg.scan.min_points or not keys:
             continue
         grid, map_normals = map_grid(keys, estimates, points, g, observed=True)

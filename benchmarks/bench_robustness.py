@@ -41,6 +41,7 @@ from radioslam.scene import Scene, scene_to_yaml
 from radioslam.sensing import SensingConfig
 from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import RANDOM_STREAM_VERSION, Simulator
+from radioslam.sim.odometry import per_step_sigmas
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, load_slam_config
 
 FIELDS = ("range_m", "angle_rad", "power_db", "beam", "orientation")
@@ -82,6 +83,8 @@ def run_case(case: BenchCase, cache: Path, peers: bool = True, perturb_m: float 
     if perturb_m > 0:
         scans = perturbed(scans, np.random.default_rng(case.seed), perturb_m)
     truth, odometry = case.scene.poses, case.odometry()
+    if odometry is not None:  # the SLAM told the odometry's stated noise, as a run on the scene's odometry is
+        config = (config or SlamConfig()).with_odometry_noise(*per_step_sigmas(case.scene.spec.odometry, truth))
     tick = time.perf_counter()
     try:
         result = RadioSlam(config).run(scans, odometry)

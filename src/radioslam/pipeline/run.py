@@ -17,6 +17,7 @@ from radioslam.pipeline.slam import slam_stage
 from radioslam.progress import SILENT, Progress
 from radioslam.scene import load_scene
 from radioslam.sensing import SensingConfig
+from radioslam.sim.odometry import per_step_sigmas
 from radioslam.slam import SlamConfig, SlamResult
 
 SIMULATED_ODOMETRY = "simulated"  # run --odometry simulated: the scene's own drifting odometry
@@ -46,9 +47,13 @@ def run_scene(scene_name: str, out: Path, options: RunOptions | None = None,
     """Simulate and sense, SLAM, evaluate: a whole run directory; the SLAM result and metrics."""
     o = options or RunOptions()
     simulated = o.odometry is not None and str(o.odometry) == SIMULATED_ODOMETRY
-    if simulated and load_scene(scene_name).spec.odometry is None:
-        raise RadioslamError("the scene has no odometry: block to simulate one from", file=scene_name,
-                             field="odometry")
+    slam = o.slam
+    if simulated:
+        scene = load_scene(scene_name)
+        if scene.spec.odometry is None:
+            raise RadioslamError("the scene has no odometry: block to simulate one from", file=scene_name,
+                                 field="odometry")
+        slam = slam.with_odometry_noise(*per_step_sigmas(scene.spec.odometry, scene.poses))  # its stated noise
     if o.save_iq:  # the stages one by one: captures written, then read back and sensed
         tick = time.perf_counter()
         simulate_stage(scene_name, out, o.seed, o.snr_db, o.force, capture_writer(o.seed, o.channel, progress),
@@ -60,7 +65,7 @@ def run_scene(scene_name: str, out: Path, options: RunOptions | None = None,
     else:
         timings = simulate_and_sense(scene_name, out, o.seed, o.snr_db, progress, o.sensing, o.force, o.max_memory,
                                      o.resume, o.channel, o.radio, o.plot_pose)
-    result = slam_stage(out, o.slam, timings, RunDir(out).odometry if simulated else o.odometry, o.scene_frame,
+    result = slam_stage(out, slam, timings, RunDir(out).odometry if simulated else o.odometry, o.scene_frame,
                         progress)
     return result, evaluate_stage(out)
 

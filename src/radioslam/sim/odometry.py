@@ -36,3 +36,12 @@ def simulated_odometry(poses: np.ndarray, spec: OdometrySpec, rng: np.random.Gen
     if spec.gyro_only:  # the turns alone: a gyro knows nothing of the translation
         xy = np.full_like(xy, np.nan)
     return np.column_stack([xy, np.angle(np.exp(1j * heading))])
+
+
+def per_step_sigmas(spec: OdometrySpec, poses: np.ndarray) -> tuple[float, float]:
+    """The odometry's error per step as one σ each (m, deg): its white noise and its biases on the walk's median
+    step (the scale bias times the step's length, the heading bias), added in quadrature: what a between
+    factor of one step can state of it."""
+    steps = np.linalg.norm(np.diff(np.asarray(poses, dtype=np.float64)[:, :2], axis=0), axis=1)
+    step = float(np.median(steps)) if len(steps) else 0.0
+    return float(np.hypot(spec.sigma_m, spec.scale_bias * step)), float(np.hypot(spec.sigma_deg, spec.heading_bias_deg))

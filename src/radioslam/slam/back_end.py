@@ -145,6 +145,12 @@ class BackEnd:
         self.stale = True
         self.loops = [loop for loop in self.loops if not loop.anchor < k <= loop.key]
 
+    def odometry_covariance(self, motion) -> np.ndarray | None:
+        """The noise of the external odometry's steps (a gyro's: its turn alone), None without one."""
+        if motion.odometry is None:
+            return None
+        return self.gyro_noise if motion.gyro_only else self.odometry_noise
+
     def relocalized_pose(self, loop: LoopClosure) -> np.ndarray:
         """The world pose a relocalization places its scan at."""
         return LoopCloser.placed_pose(loop, self.estimates)

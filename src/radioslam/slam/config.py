@@ -130,7 +130,9 @@ class MotionConfig(_Section):
     # a relocalized scan's jump from the pose before it: next to no information
     relocalized_sigma_m: float = Field(100.0, gt=0)
     relocalized_sigma_deg: float = Field(180.0, gt=0)
-    # external odometry (--odometry FILE): per-step noise of its relative motion, as between factors
+    # external odometry (--odometry FILE): per-step noise of its relative motion (between factors, the motion
+    # prior, the front end's search); a run on a scene's own simulated odometry takes the scene's stated noise
+    # unless these are set (:meth:`SlamConfig.with_odometry_noise`)
     odometry_sigma_m: float = Field(0.05, gt=0)
     odometry_sigma_deg: float = Field(2.0, gt=0)
 
@@ -182,12 +184,11 @@ class LoopClosureConfig(_Section):
     # built (0.5 GB at 50 m and 5 cm); a terminal carried farther than this from its last pose is not found again
     relocalize_radius_m: float = Field(50.0, gt=0, le=10_000.0)
     # a matched scan with this fraction of its points on known free space is searched for too, and
-    # relocalized where it scores relocalize_gain better than its local match
+    # relocalized where its posterior beats its local match's (:mod:`radioslam.slam.posterior`)
     contradicted_fraction: float = Field(0.15, gt=0, le=1)
-    relocalize_gain: float = Field(0.25, ge=0)
     # a matched scan scoring below suspect_drop times the median of the latest suspect_window opens a
     # trial (:mod:`radioslam.slam.lost_found`): searched for in the whole map, then followed; once
-    # confirm_scans in a row are each explained relocalize_gain better there, they are relocalized
+    # confirm_scans are followed and their posterior odds reach the ending's, they are relocalized
     suspect_drop: float = Field(0.7, gt=0, le=1)
     suspect_window: int = Field(10, ge=2)
     confirm_scans: int = Field(3, ge=1)
@@ -317,6 +318,12 @@ class SlamConfig(_Section):
     plane_adjustment: PlaneAdjustmentConfig = Field(default_factory=PlaneAdjustmentConfig)
     ending: EndingConfig = Field(default_factory=EndingConfig)
     map: MapConfig = Field(default_factory=MapConfig)
+
+    def with_odometry_noise(self, sigma_m: float, sigma_deg: float) -> "SlamConfig":
+        """This config with the odometry's stated per-step noise, where the config does not set its own."""
+        stated = {"odometry_sigma_m": sigma_m, "odometry_sigma_deg": sigma_deg}
+        update = {name: value for name, value in stated.items() if name not in self.motion.model_fields_set}
+        return self.model_copy(update={"motion": self.motion.model_copy(update=update)})
 
 
 def load_slam_config(path: str | Path) -> SlamConfig:

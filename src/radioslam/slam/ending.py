@@ -25,17 +25,17 @@ answer, see :class:`Ending`), the run says so (``ambiguous_trajectory``) and kee
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
 
 from radioslam.slam.config import GridConfig
-from radioslam.slam.measurement import scan_log_likelihoods
 from radioslam.slam.motion import MotionModel
+from radioslam.slam.posterior import Posterior
 from radioslam.slam.result import scan_ranges
-from radioslam.slam.scan_points import ScanPoints, map_grid
-from radioslam.slam.se2 import between, compose, inverse, wrap_angle
+from radioslam.slam.scan_points import ScanPoints
+from radioslam.slam.se2 import compose, inverse, wrap_angle
 from radioslam.slam.status import ScanStatus
 
 
@@ -124,7 +124,8 @@ class Judge:
         scored: list[tuple[np.ndarray, list[float]]] = []  # each kept trajectory and its scans' terms
         for _, poses in kept:
             scored.append((poses, self.scan_terms(poses, scans, scored)))
-        hypotheses = [Hypothesis(source, poses, sum(terms, 0.0), log_prior(poses, motion))
+        posterior = Posterior(self.grid, self.radius_m, self.max_scans, motion)
+        hypotheses = [Hypothesis(source, poses, sum(terms, 0.0), posterior.trajectory_prior(poses))
                       for (source, poses), (_, terms) in zip(kept, scored)]
         return Ending(sorted(hypotheses, key=lambda h: -h.log_posterior), self.odds)
 
@@ -149,24 +150,9 @@ class Judge:
             differ = np.flatnonzero(np.any(other != poses, axis=1))
             if (same := int(differ[0]) if len(differ) else len(poses)) > shared:
                 shared, reused = same, terms
-        estimates = {k: poses[k] for k in scans}
-        out = []
-        for i, k in enumerate(keys[1:], start=1):
-            if k < shared:
-                out.append(reused[i - 1])
-                continue
-            earlier = np.array(keys[:i])
-            distance = np.linalg.norm(poses[earlier, :2] - poses[k, :2], axis=1)
-            near = earlier[np.argsort(distance, kind="stable")[: self.max_scans]]
-            near = sorted(near[np.linalg.norm(poses[near, :2] - poses[k, :2], axis=1) <= self.radius_m].tolist())
-            if not near:
-                out.append(0.0)
-                continue
-            grid, _ = map_grid(near, estimates, scans, self.grid, observed=True)
-            points = scans[k]
-            out.append(float(scan_log_likelihoods(grid, points.xy, points.normals, points.observation_weights,
-                                                  poses[k], points.sightings, self.grid.free_stop_m)[0]))
-        return out
+        posterior = Posterior(self.grid, self.radius_m, self.max_scans, None)
+        return [reused[i - 1] if k < shared else posterior.scan_term(scans[k], poses[k], keys[:i], poses, scans)
+                for i, k in enumerate(keys[1:], start=1)]
 
     def warning(self, best: Hypothesis, runner_up: Hypothesis, odds: float, status: list, odometry: bool) -> str:
         """One line: the two trajectories, their odds, where they part (the scans beyond ``same_m`` or
@@ -188,17 +174,6 @@ class Judge:
         return (f"ambiguous trajectory: the {runner_up.source.value}'s {standing} the {best.source.value}'s "
                 f"answer (scans {scan_ranges(apart.tolist())} differ): {why}; it is written as "
                 f"trajectory_alternative.tum; what would help: {helps}")
-
-
-def log_prior(poses: np.ndarray, motion: MotionModel) -> float:
-    """Σ_k log p(step k) of the motion prior, each step's hypotheses those of the trajectory's own last step
-    (and the odometry's step k)."""
-    total, model = 0.0, replace(motion, velocity=None, speeds=[])  # the walk's motion model, from its start
-    for k in range(1, len(poses)):
-        step = between(poses[k - 1], poses[k])
-        total += float(model.prior(k, poses[k - 1]).log_prob(step[None])[0])
-        model.velocity = step
-    return total
 
 
 def odometry_in_map_frame(odometry: np.ndarray, first_pose: np.ndarray) -> np.ndarray | None:

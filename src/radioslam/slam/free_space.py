@@ -36,9 +36,8 @@ def free_samples(xy: np.ndarray, normals: np.ndarray, stop: float, pose_radius: 
     phi, index = np.unique(normals[known], return_index=True)  # one line per arc (its points share φ)
     reach = np.linalg.norm(xy[known][index], axis=1) - stop - start
     phi, reach = phi[reach > 0], reach[reach > 0]
-    count = np.ceil(reach / spacing).astype(np.int64)
-    line = np.repeat(np.arange(len(phi)), count)
-    along = start + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)) * spacing
+    line, step = ragged_steps(np.ceil(reach / spacing).astype(np.int64))
+    along = start + step * spacing
     samples.append(np.stack([along * np.cos(phi[line]), along * np.sin(phi[line])], axis=1))
     return np.concatenate(samples)
 
@@ -49,7 +48,12 @@ def seen_samples(xy: np.ndarray, spacing: float) -> np.ndarray:
     design: it tells space the map has observed from space it never saw (:mod:`radioslam.slam.measurement`),
     not where the surfaces are."""
     reach = np.linalg.norm(xy, axis=1)
-    count = np.ceil(reach / spacing).astype(np.int64)
-    ray = np.repeat(np.arange(len(xy)), count)
-    along = (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)) * spacing
+    ray, step = ragged_steps(np.ceil(reach / spacing).astype(np.int64))
+    along = step * spacing
     return xy[ray] * (along / np.maximum(reach[ray], 1e-12))[:, None]
+
+
+def ragged_steps(count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Lines of ``count`` (L,) samples each, flattened: each sample's line (N,) and its index along it (N,)."""
+    line = np.repeat(np.arange(len(count)), count)
+    return line, np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)

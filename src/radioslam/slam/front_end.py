@@ -304,17 +304,8 @@ class FrontEnd:
         return map_grid(self.local_map_keys(estimates), estimates, self.points, self.grid_cfg)
 
     def local_map_keys(self, estimates: dict[int, np.ndarray]) -> list[int]:
-        """The latest ``local_map_scans`` scans, and up to ``nearby_scans`` older ones taken within
-        ``nearby_radius_m`` of the last pose (nearest first): what saw the walls around the terminal,
-        as kiss-icp keeps every point within range of the current pose."""
-        recent, older = self.keys[-self.cfg.local_map_scans:], np.array(self.keys[:-self.cfg.local_map_scans], int)
-        if not len(older) or not self.cfg.nearby_scans:
-            return recent
-        here = estimates[self.keys[-1]][:2]
-        distance = np.linalg.norm(np.array([estimates[m][:2] for m in older]) - here, axis=1)
-        near = np.argsort(distance, kind="stable")[: self.cfg.nearby_scans]
-        near = near[distance[near] <= self.cfg.nearby_radius_m]
-        return sorted(older[near].tolist()) + recent
+        """The front end's local map now (:func:`local_map_keys`)."""
+        return local_map_keys(self.keys, estimates, self.cfg)
 
     def update(self, k: int, step: Step, points: ScanPoints, previous: np.ndarray | None) -> None:
         """Scan k joins the local map (unless skipped) and the motion model learns its step."""
@@ -332,3 +323,17 @@ class FrontEnd:
             (f"taken elsewhere: scans {trial[0].key}–{trial[-1].key} match another place of the map far better "
              "than the local map, relocalized there")
         return Step(pose, self.jump, ScanStatus.RELOCALIZED, score, note=note)
+
+
+def local_map_keys(keys: list[int], estimates, cfg: FrontEndConfig) -> list[int]:
+    """The latest ``local_map_scans`` of ``keys`` (the scans matched so far, oldest first), and up to
+    ``nearby_scans`` older ones taken within ``nearby_radius_m`` of the last one's pose (nearest first): what
+    saw the walls around the terminal, as kiss-icp keeps every point within range of the current pose."""
+    recent, older = keys[-cfg.local_map_scans:], np.array(keys[:-cfg.local_map_scans], int)
+    if not len(older) or not cfg.nearby_scans:
+        return recent
+    here = estimates[keys[-1]][:2]
+    distance = np.linalg.norm(np.array([estimates[m][:2] for m in older]) - here, axis=1)
+    near = np.argsort(distance, kind="stable")[: cfg.nearby_scans]
+    near = near[distance[near] <= cfg.nearby_radius_m]
+    return sorted(older[near].tolist()) + recent

@@ -149,6 +149,11 @@ class LikelihoodGrid:
         grid.__dict__["fields"] = fields  # the cached stack, already built
         return grid
 
+    @property
+    def area_m2(self) -> float:
+        """The area the grid covers."""
+        return float(np.prod(self.values.shape)) * self.resolution ** 2
+
     def cells(self, points: np.ndarray) -> np.ndarray:
         """Integer cells (..., 2) of points (..., 2), clipped to the grid."""
         c = np.floor((points - self.origin) / self.resolution).astype(np.int64)

@@ -56,6 +56,7 @@ class LoopClosure:
     score: float
     weight: float = 1.0  # in (0, 1]: how far inside the acceptance tests it lies
     relocalization: bool = False  # places a lost scan: the graph must keep it
+    searched_m2: float = 0.0  # a relocalization's: the area its search covered (any pose there was possible)
 
 
 def mahalanobis2(measured: np.ndarray, predicted: np.ndarray, covariance: np.ndarray) -> float:
@@ -301,7 +302,7 @@ class LoopCloser:
             return None
         if self.degeneracy.matched_weak(grid, pose, points.xy, points.normals, local.covariance) is not None:
             return None
-        return self.placed(k, pose, score, local.covariance, keys, estimates)
+        return replace(self.placed(k, pose, score, local.covariance, keys, estimates), searched_m2=grid.area_m2)
 
     @staticmethod
     def placed_pose(loop: LoopClosure, estimates: dict[int, np.ndarray]) -> np.ndarray:

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from radioslam.slam.free_space import ragged_steps
 from radioslam.slam.grid import LIKELIHOOD_FLOOR, LikelihoodGrid
 from radioslam.slam.refine import fit_terms
 
@@ -95,9 +96,9 @@ def line_log_likelihoods(grid: LikelihoodGrid, sightings: np.ndarray, poses: np.
         return np.zeros(len(poses))
     phi, reach = sightings[:, 0], np.maximum(sightings[:, 1] - stop, 0.0)
     count = np.ceil(reach / (grid.resolution / 2)).astype(np.int64) + 1  # both ends sampled
-    line = np.repeat(np.arange(len(phi)), count)
+    line, step = ragged_steps(count)
     first = np.cumsum(count) - count
-    along = np.minimum((np.arange(count.sum()) - np.repeat(first, count)) * (grid.resolution / 2), reach[line])
+    along = np.minimum(step * (grid.resolution / 2), reach[line])
     heading = poses[:, 2:3] + phi[line]
     world = np.stack([poses[:, 0:1] + along * np.cos(heading), poses[:, 1:2] + along * np.sin(heading)], axis=-1)
     cells = grid.cells(world)

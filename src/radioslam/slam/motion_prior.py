@@ -98,8 +98,10 @@ class MotionPrior:
         weights = np.full(len(means), 1.0 / len(means))
         return cls(means, sigmas, weights, platform.surprise, max_step_m)
 
-    def log_prob(self, steps: np.ndarray) -> np.ndarray:
-        """log p(s) (C,) of steps (C, 3) in the previous pose's frame (x forward, y left, θ)."""
+    def log_prob(self, steps: np.ndarray, area_m2: float | None = None) -> np.ndarray:
+        """log p(s) (C,) of steps (C, 3) in the previous pose's frame (x forward, y left, θ); the unexpected share
+        uniform over the front end's window, and beyond it (a jump) over ``area_m2`` (the area a wider search
+        covers: a relocalization's, the map's), or impossible where none is given."""
         steps = np.atleast_2d(np.asarray(steps, dtype=np.float64))
         d = steps[:, None, :] - self.means[None]
         d[..., 2] = wrap_angle(d[..., 2])
@@ -115,5 +117,6 @@ class MotionPrior:
         peak = gauss.max(axis=1, keepdims=True)
         mixture = peak[:, 0] + np.log(np.sum(np.exp(gauss - peak), axis=1))
         inside = np.all(np.abs(steps[:, :2]) <= self.max_step_m, axis=1)  # the searched window
-        uniform = np.where(inside, -np.log((2 * self.max_step_m) ** 2 * 2 * np.pi), -np.inf)
+        beyond = -np.inf if area_m2 is None else -np.log(max(area_m2, (2 * self.max_step_m) ** 2) * 2 * np.pi)
+        uniform = np.where(inside, -np.log((2 * self.max_step_m) ** 2 * 2 * np.pi), beyond)
         return np.logaddexp(np.log1p(-self.surprise) + mixture, np.log(self.surprise) + uniform)

@@ -76,7 +76,8 @@ class PlaneAdjustment:
 
     def refine(self, poses: np.ndarray, sightings: list[np.ndarray], step_covariance: dict[int, np.ndarray],
                unplaced: np.ndarray | None = None, degenerate: np.ndarray | None = None,
-               pose_sigma: np.ndarray | None = None) -> PlaneAdjustmentResult:
+               pose_sigma: np.ndarray | None = None,
+               odometry_covariance: np.ndarray | None = None) -> PlaneAdjustmentResult:
         """Poses (P, 3) refined with the scans' sightings (A_k, 2: bearing, range) of walls;
         ``step_covariance[k]`` is the covariance of the step into pose k in pose k − 1's frame;
         ``unplaced`` (P,) marks the poses the front end left to the motion model (predicted,
@@ -84,7 +85,9 @@ class PlaneAdjustment:
         (:func:`radioslam.slam.wall_placement.place`) and held to the pose graph only loosely;
         ``degenerate`` (P,) marks the poses the front end fixed in heading and across the walls only:
         each is placed within ±``degenerate_search`` of its heading and, once placed, held as loosely;
-        ``pose_sigma`` (P, 3) is the pose graph's marginal σ of each pose (None: the anchor's alone)."""
+        ``pose_sigma`` (P, 3) is the pose graph's marginal σ of each pose (None: the anchor's alone);
+        ``odometry_covariance`` (3, 3): the external odometry's noise per step, which measured every step
+        of the pose graph too (its information added to each step's hold)."""
         poses = np.asarray(poses, dtype=np.float64)
         if len(sightings) != len(poses):
             raise SlamError(f"{len(sightings)} sighting lists for {len(poses)} poses", field="(sightings)")
@@ -112,8 +115,8 @@ class PlaneAdjustment:
         # the anchor's): a stretch no loop closed drifts by decimetres and degrees, and the walls must move it
         anchor = self.anchor_sigma if pose_sigma is None else np.maximum(self.anchor_sigma, pose_sigma)
         anchor_sigma = np.where(unplaced[:, None], self.loose_sigma, anchor)
-        problem = _Problem(start, scan, observed, wall, self._steps(poses, step_covariance, unplaced), self.sigma,
-                           self.robust_c, anchor_sigma, local)
+        steps = self._steps(poses, step_covariance, unplaced, odometry_covariance)
+        problem = _Problem(start, scan, observed, wall, steps, self.sigma, self.robust_c, anchor_sigma, local)
         refined, walls, used = problem.solve(self.iterations)
         # the first pose defines the map frame (DESIGN.md): the solution carried rigidly back onto it
         jump = compose(poses[0], inverse(refined[0] + centre))
@@ -143,18 +146,22 @@ class PlaneAdjustment:
                 wall[rows] = np.where(found[1] >= 0, number[found[1]], -1)
         return start, wall
 
-    def _steps(self, poses: np.ndarray, step_covariance: dict[int, np.ndarray],
-               unplaced: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _steps(self, poses: np.ndarray, step_covariance: dict[int, np.ndarray], unplaced: np.ndarray,
+               odometry_covariance: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """The pose graph's steps (P − 1, 3) and their whitening matrices (P − 1, 3, 3): Wᵀ W = Σ⁻¹,
         Σ the front end's step covariance inflated (a step without one: loose). The steps into and out
         of an unplaced pose are loose too: the front end matched the next scan against the map, not
-        against the motion model's guess, and a degenerate scan's step is only as good as its match."""
+        against the motion model's guess, and a degenerate scan's step is only as good as its match.
+        External odometry measured each step as well, whatever the scans: its information adds (the pose
+        graph's step already fuses its value, so only its weight enters here, not its value again)."""
         steps = between(poses[:-1], poses[1:])
         loose = np.diag(self.loose_sigma**2)
         cov = np.array([step_covariance.get(k, loose) for k in range(1, len(poses))]).reshape(-1, 3, 3)
         cov = 0.5 * (cov + np.swapaxes(cov, 1, 2)) + (unplaced[:-1] | unplaced[1:])[:, None, None] * loose
-        cov = cov * self.step_inflation**2
-        whiten = np.swapaxes(np.linalg.cholesky(np.linalg.inv(cov)), 1, 2)  # L Lᵀ = Σ⁻¹ → W = Lᵀ
+        information = np.linalg.inv(cov * self.step_inflation**2)
+        if odometry_covariance is not None:
+            information = information + np.linalg.inv(odometry_covariance)
+        whiten = np.swapaxes(np.linalg.cholesky(information), 1, 2)  # L Lᵀ = Σ⁻¹ → W = Lᵀ
         return steps, whiten
 
 

@@ -29,6 +29,7 @@ from radioslam.slam.loop_closer import LoopCloser, LoopClosure
 from radioslam.slam.lost_found import LostAndFound
 from radioslam.slam.occupancy import OccupancyGrid
 from radioslam.slam.plane_adjustment import PlaneAdjustment
+from radioslam.slam.posterior import Posterior
 from radioslam.slam.result import SlamResult
 from radioslam.slam.scan_points import fused_points, prepare_points
 from radioslam.slam.status import ScanStatus
@@ -58,8 +59,8 @@ class SlamSession:
         self.loop_hook = loop_hook or (lambda loop: loop)
         self.front_end, self.loop_closer = FrontEnd.from_config(cfg, odometry), LoopCloser.from_config(cfg)
         self.back_end = BackEnd.from_config(cfg)
-        self.lost_and_found, self.forks = LostAndFound.from_config(cfg), Forks.from_config(cfg)
-        self.contradiction = Contradiction(cfg.loop_closure.contradicted_fraction, cfg.loop_closure.relocalize_gain)
+        self.posterior = Posterior.from_config(cfg, self.front_end.motion)  # one scan's placement weighed
+        self.lost_and_found, self.forks = LostAndFound.from_config(cfg, self.posterior), Forks.from_config(cfg)
         self.steps: list[Step] = []
         self.sightings: list[np.ndarray] = []  # each scan's sightings of walls, for the last solve
         self.seconds: list[float] = []
@@ -95,16 +96,18 @@ class SlamSession:
         # 2. register it against the local map: the motion's hypotheses and the scan's own rotation candidates
         step = front_end.register(k, points, back_end.estimates).noted(thinned)
         # 3. a lost scan (one of a stretch nothing matched, or one whose match puts points on space the map
-        #    saw through) is searched for in the whole map: relocalized where the map explains it far better
+        #    saw through) is searched for in the whole map: relocalized where its posterior there (what the map
+        #    explains better, less the prior of a jump that far) beats the front end's pose's
         self.lost = self.lost + 1 if step.status is ScanStatus.PREDICTED else 0
-        suspect = self.lost >= cfg.loop_closure.relocalize_after or self.contradiction.suspicious(step)
+        suspect = self.lost >= cfg.loop_closure.relocalize_after or (
+            step.status is not ScanStatus.SKIPPED and step.contradicted >= cfg.loop_closure.contradicted_fraction)
         if suspect and step.status is not ScanStatus.PREDICTED and forks.contested(k, back_end.estimates,
                                                                                   loop_closer, step, points):
             suspect = False  # an open fork the map contradicts the choice of decides first (step 8)
         found = loop_closer.relocalize(k, points, back_end.estimates, k - self.lost) if suspect else None
-        if found is not None and (step.status is ScanStatus.PREDICTED or self.contradiction.better(found.score, step)):
+        if found is not None and self._relocation_log_odds(k, found, step, points) > 0.0:
             step = front_end.relocalized(back_end.relocalized_pose(found), found.score)
-        relocalizations = [] if found is None else [found]
+        relocalizations = [found] if step.status is ScanStatus.RELOCALIZED else []
         # 4. a score drop opens a trial elsewhere in the map; once confirmed by the scans after it, the
         #    terminal was carried there (kidnapped): every scan of the trial is relocalized
         confirmed = self.lost_and_found.observe(k, step.status, step.pose, step.score, points, back_end.estimates,
@@ -135,6 +138,16 @@ class SlamSession:
         back_end.add_loops(loops + relocalizations)
         self.seconds.append(time.perf_counter() - tick)
         return ScanUpdate(k, np.array(back_end.estimates[k]), self.steps[k].status, self.seconds[-1])
+
+    def _relocation_log_odds(self, k: int, found: LoopClosure, step: Step, points) -> float:
+        """Scan k's log posterior odds at the place relocalization ``found`` against the front end's pose: the
+        map before it explaining each, and the step from pose k − 1 to each under the motion prior whose
+        unexpected share covers the area searched."""
+        estimates, scans = self.back_end.estimates, self.loop_closer.points
+        earlier, last = self.loop_closer.map_keys(k, before=k), estimates[k - 1]
+        return self.posterior.placement(k, points, self.back_end.relocalized_pose(found), last, earlier, estimates,
+                                        scans, found.searched_m2) - \
+            self.posterior.placement(k, points, step.pose, last, earlier, estimates, scans, found.searched_m2)
 
     def _decide(self, k: int, decided: Decision | None, loops: list[LoopClosure]) -> list[LoopClosure]:
         """A fork decided at scan k: its rival's poses taken; the loops of scan k that still hold."""
@@ -176,7 +189,8 @@ class SlamSession:
             degenerate[0] |= (unplaced[1] or degenerate[1]) and not unplaced[0]
         marginal = cfg.plane_adjustment.anchors is Anchors.MARGINAL
         adjusted = adjuster.refine(poses, self.sightings, back_end.step_covariance, unplaced, degenerate,
-                                   back_end.pose_sigmas(len(steps)) if marginal else None) if adjuster else None
+                                   back_end.pose_sigmas(len(steps)) if marginal else None,
+                                   back_end.odometry_covariance(self.front_end.motion)) if adjuster else None
         for k in [] if adjusted is None else adjusted.placed:
             steps[k] = steps[k].noted("placed on the walls the other scans sighted by the plane adjustment")
         result = self._result(poses if adjusted is None else adjusted.poses)
@@ -221,21 +235,3 @@ class SlamSession:
                             dead_reckoned_after=cfg.motion.dead_reckoned_scans)
         result.warnings = [f"scan {k}: {s.note}" for k, s in enumerate(steps) if s.note] + result.summary_lines()
         return result
-
-
-@dataclass
-class Contradiction:
-    """A matched scan that puts at least ``fraction`` of its points on space the map saw through is
-    suspect: exploring puts points where the map knows nothing, but a wrong place (a kidnapped
-    terminal still half-matches the room's long walls within a step of where it was) puts them
-    across free space. It is relocalized only where the map explains it ``gain`` better."""
-
-    fraction: float
-    gain: float
-
-    def suspicious(self, step: Step) -> bool:
-        return step.status is not ScanStatus.SKIPPED and step.contradicted >= self.fraction
-
-    def better(self, score: float, step: Step) -> bool:
-        return self.suspicious(step) and score >= (1.0 + self.gain) * step.score
-
