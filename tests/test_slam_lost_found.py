@@ -17,7 +17,7 @@ def test_a_trial_is_decided_by_enough_scans_at_the_endings_odds():
     cfg = SlamConfig()
     lost_and_found = LostAndFound.from_config(cfg, None)
     assert np.isclose(lost_and_found.bound, np.log(cfg.ending.odds))
-    trial = Trial([0], np.zeros(3), [object()], 40.0)
+    trial = Trial([0], np.zeros(3), [object()], log_odds=40.0)
     lost_and_found.trial = trial
     assert not lost_and_found.decided()
     trial.found += [object()] * (cfg.loop_closure.confirm_scans - 1)
@@ -65,6 +65,7 @@ def _odds(monkeypatch, value, jump=0.0):
     """Every scan a trial opens or follows adds ``value`` to its log odds; a jump's prior odds are ``jump``."""
     monkeypatch.setattr(LostAndFound, "log_odds", lambda *args, **kwargs: value)
     monkeypatch.setattr(LostAndFound, "jump_log_odds", lambda *args, **kwargs: jump)
+    monkeypatch.setattr(LostAndFound, "_front_placements", lambda self, pose, *args: pose[None])
 
 
 def _walk(lost_and_found, stub, scores, odds, monkeypatch, start=0):

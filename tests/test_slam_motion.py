@@ -264,6 +264,23 @@ def test_the_stated_per_step_sigmas_are_the_simulated_odometrys_step_errors():
     assert (own.motion.odometry_sigma_m, own.motion.odometry_sigma_deg) == (0.2, sigma_deg)
 
 
+def test_odometry_keeps_a_stretch_no_scan_fixed_until_its_drift_leaves_the_search_window():
+    """With full odometry a stretch of scans that matched nothing is lost only once the odometry's own drift
+    (3σ: its stated translation noise and its heading's random walk over the walk's median step) exceeds the
+    front end's window: ≈ 42 steps of 0.5 m for a robot's 1.1 cm and 0.32°, ≈ 12 for the loose default 5 cm
+    and 2°; without odometry the configured 2 (a platform's step is as wide as the window)."""
+    from radioslam.slam.motion import MotionModel
+
+    walk = np.column_stack([np.arange(200) * 0.5, np.zeros(200), np.zeros(200)])
+    robot = SlamConfig().with_odometry_noise(0.0112, 0.316).motion
+    n = MotionModel.from_config(robot, walk).dead_reckoning_scans()
+    sigma = np.sqrt(n * 0.0112 ** 2 + np.radians(0.316) ** 2 * 0.25 * n ** 3 / 3)
+    before = np.sqrt((n - 1) * 0.0112 ** 2 + np.radians(0.316) ** 2 * 0.25 * (n - 1) ** 3 / 3)
+    assert 3 * before <= robot.max_step_m < 3 * sigma and 38 <= n <= 46
+    assert 10 <= MotionModel.from_config(SlamConfig().motion, walk).dead_reckoning_scans() <= 14
+    assert MotionModel.from_config(SlamConfig().motion, None).dead_reckoning_scans() == 0
+
+
 def test_config_file_sets_the_slam_and_bad_keys_are_one_line(demo_run, tmp_path):
     out, _ = demo_run
     good = tmp_path / "good.yaml"

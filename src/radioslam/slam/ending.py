@@ -165,6 +165,8 @@ class Judge:
             causes.append("nothing fixes the position along a corridor or wall")
         if ScanStatus.AMBIGUOUS in there:
             causes.append("places that look alike under a turn or a shift")
+        if ScanStatus.RELOCALIZED in there:
+            causes.append("a jump to another place of the map that the motion did not show")
         if ScanStatus.PREDICTED in there or ScanStatus.SKIPPED in there:
             causes.append("scans with too few echoes (open space, or nothing within range)")
         why = "; ".join(causes) or "the scans explain both about as well"

@@ -41,7 +41,7 @@ import numpy as np
 from radioslam.slam.config import LoopClosureConfig
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
-from radioslam.slam.posterior import Posterior
+from radioslam.slam.posterior import KEEP, Posterior
 from radioslam.slam.scan_points import ScanPoints
 from radioslam.slam.se2 import between, compose, inverse
 from radioslam.slam.status import ScanStatus
@@ -57,6 +57,7 @@ class Trial:
     keys: list[int]  # the map's scans before the first suspect one
     tracked: np.ndarray  # the front end's pose of the latest scan followed
     found: list[LoopClosure] = field(default_factory=list)  # one relocalization per scan followed
+    step: np.ndarray | None = None  # the front end's step into the first scan (the no-jump branch's)
     log_odds: float = 0.0  # log p(trial's places | scans) − log p(front end's poses | scans) since the drop
     jump: float = 0.0  # of which the jump's prior odds (≤ 0: the motion expected no jump), paid once
 
@@ -98,6 +99,7 @@ class LostAndFound:
         self.trial: Trial | None = None
         self.alert = 0  # scans left after a confirmed jump during which each is also searched for where it was taken
         self.taken_from: int | None = None  # the last scan before that jump
+        self.taken: list[tuple[int, np.ndarray]] = []  # each confirmed trial's first scan and the no-jump step into it
         # the scans of each trial that ended undecided: followed for at least confirm_scans scans, its odds
         # within the stated ones of the front end's poses
         self.undecided: list[list[int]] = []
@@ -110,6 +112,17 @@ class LostAndFound:
     @classmethod
     def from_config(cls, cfg, posterior: Posterior) -> "LostAndFound":
         return cls(cfg.loop_closure, cfg.motion.max_step_m, posterior, cfg.ending.odds)
+
+    def branches(self, poses: np.ndarray) -> list[np.ndarray]:
+        """The trajectories (P, 3) without each confirmed jump: ``poses`` from its first scan on carried back onto
+        the front end's step there (the walk's end: a jump is a hypothesis, its alternative kept for the ending)."""
+        out = []
+        for key, step in self.taken:
+            back = compose(compose(poses[key - 1], step), inverse(poses[key]))
+            branch = poses.copy()
+            branch[key:] = [compose(back, pose) for pose in poses[key:]]
+            out.append(branch)
+        return out
 
     def forget(self) -> None:
         """Drop the open trial (the poses it was followed from have moved)."""
@@ -136,6 +149,7 @@ class LostAndFound:
         if status in TRACKED and np.isfinite(score):
             self.scores.append(score)
         if self.decided():
+            self.taken.append((self.trial.found[0].key, self.trial.step))
             found, self.trial = self.trial.found, None
             self.alert, self.taken_from = self.cfg.alert_scans, found[0].key - 1
             return found
@@ -146,21 +160,30 @@ class LostAndFound:
         return self.trial is not None and len(self.trial.found) >= self.cfg.confirm_scans and \
             self.trial.log_odds >= self.bound
 
-    def log_odds(self, k: int, points: ScanPoints, place: np.ndarray, pose: np.ndarray, keys: list[int],
+    def log_odds(self, k: int, points: ScanPoints, place: np.ndarray, fronts: np.ndarray, keys: list[int],
                  places: dict[int, np.ndarray], estimates: dict[int, np.ndarray], scans: dict[int, ScanPoints],
                  area_m2: float | None = None, velocity=None) -> float:
         """Scan k's log posterior at the trial's ``place`` (the map ``keys`` at the trial's ``places``, its step
-        from its last place with its own ``velocity``) less that at the front end's ``pose`` (the map at the
-        front end's ``estimates``, the walk's motion); ``area_m2``: the trial's first scan, a jump whose
-        unexpected share is spread over the area searched (both placements under that one prior)."""
+        from its last place with its own ``velocity``) less that of the no-jump hypothesis: the better of its
+        placements ``fronts`` (F, 3: the front end's pose, and its best fit within a step: a front end that
+        slipped was not carried away), against the map at the front end's ``estimates`` with the walk's motion;
+        ``area_m2``: the trial's first scan, a jump whose unexpected share is spread over the area searched
+        (every placement under that one prior)."""
         post = self.posterior
-        if area_m2 is not None:  # the first scan: both steps from the front end's last pose
-            last = estimates[k - 1]
-            return post.placement(k, points, place, last, keys, places, scans, area_m2) - \
-                post.placement(k, points, pose, last, keys, estimates, scans, area_m2)
-        last_place = LoopCloser.placed_pose(self.trial.found[-1], estimates)
-        return post.placement(k, points, place, last_place, keys, places, scans, velocity=velocity) - \
-            post.placement(k, points, pose, estimates[k - 1], keys, estimates, scans)
+        first = area_m2 is not None  # the first scan: every step from the front end's last pose
+        last_place = estimates[k - 1] if first else LoopCloser.placed_pose(self.trial.found[-1], estimates)
+        trial = post.placement(k, points, place, last_place, keys, places, scans, area_m2,
+                               KEEP if first else velocity)
+        front = max(post.placement(k, points, pose, estimates[k - 1], keys, estimates, scans, area_m2)
+                    for pose in fronts)
+        return trial - front
+
+    def _front_placements(self, pose: np.ndarray, points: ScanPoints, grid: LikelihoodGrid, normals: np.ndarray,
+                          loop_closer: LoopCloser) -> np.ndarray:
+        """The no-jump hypothesis' placements of a scan (2, 3): the front end's pose, and the scan's best fit
+        within a step of it in the front end's whole map."""
+        refit, _, _ = loop_closer.follow(grid, normals, points, pose[None], self.max_step_m)
+        return np.array([pose, refit])
 
     def _open(self, k, pose, score, points, estimates, loop_closer: LoopCloser) -> None:
         """A trial for scan k: first where the terminal was taken (after a jump), then, if its score
@@ -179,7 +202,8 @@ class LostAndFound:
         place = loop_closer.placed_pose(found, estimates)
         if loop_closer.looks_alike(compose(place, inverse(pose)), pose, keys, grid, estimates):
             return
-        self._start(k, keys, pose, found, place, points, estimates, loop_closer, found.searched_m2)
+        self._start(k, keys, pose, found, place, points, estimates, loop_closer, found.searched_m2,
+                    self._front_placements(pose, points, grid, normals, loop_closer))
 
     def _open_where_taken(self, k, pose, points, estimates, loop_closer: LoopCloser, keys: list[int],
                           grid: LikelihoodGrid, normals: np.ndarray) -> bool:
@@ -194,7 +218,8 @@ class LostAndFound:
         if found_score < self.cfg.relocalize_min_score:
             return False
         found = loop_closer.placed(k, place, found_score, covariance, keys, estimates)
-        return self._start(k, keys, pose, found, place, points, estimates, loop_closer, grid.area_m2)
+        return self._start(k, keys, pose, found, place, points, estimates, loop_closer, grid.area_m2,
+                           self._front_placements(pose, points, grid, normals, loop_closer))
 
     def jump_log_odds(self, k: int, place: np.ndarray, pose: np.ndarray, estimates: dict[int, np.ndarray],
                       area_m2: float) -> float:
@@ -203,14 +228,15 @@ class LostAndFound:
         return self.posterior.step_term(k, last, place, area_m2) - self.posterior.step_term(k, last, pose, area_m2)
 
     def _start(self, k: int, keys: list[int], pose: np.ndarray, found: LoopClosure, place: np.ndarray,
-               points: ScanPoints, estimates: dict[int, np.ndarray], loop_closer: LoopCloser, area_m2: float) -> bool:
+               points: ScanPoints, estimates: dict[int, np.ndarray], loop_closer: LoopCloser, area_m2: float,
+               fronts: np.ndarray) -> bool:
         """A trial opened by ``found`` (at ``place``) if the scan itself is more probable there than at the front
-        end's pose: the jump's prior is paid by the scans that follow, or the trial fails."""
-        odds = self.log_odds(k, points, place, pose, keys, estimates, estimates, loop_closer.points, area_m2)
+        end's ``fronts``: the jump's prior is paid by the scans that follow, or the trial fails."""
+        odds = self.log_odds(k, points, place, fronts, keys, estimates, estimates, loop_closer.points, area_m2)
         jump = self.jump_log_odds(k, place, pose, estimates, area_m2)
         if odds - jump <= 0.0:
             return False
-        self.trial = Trial(keys, pose, [found], odds, jump)
+        self.trial = Trial(keys, pose, [found], between(estimates[k - 1], pose), odds, jump)
         return True
 
     def _follow(self, k, pose, points, estimates, loop_closer: LoopCloser) -> None:
@@ -220,7 +246,9 @@ class LostAndFound:
         grid, normals = loop_closer.whole_map(keys, places)  # the trial's scans at its places
         place, found_score, covariance = loop_closer.follow(grid, normals, points, trial.guesses(pose, estimates),
                                                             self.max_step_m)
-        trial.log_odds += self.log_odds(k, points, place, pose, keys, places, estimates, loop_closer.points,
+        front_grid, front_normals = loop_closer.whole_map(keys, estimates)  # the trial's scans at the front end's
+        fronts = self._front_placements(pose, points, front_grid, front_normals, loop_closer)
+        trial.log_odds += self.log_odds(k, points, place, fronts, keys, places, estimates, loop_closer.points,
                                         velocity=trial.velocity(estimates))
         if found_score < self.cfg.relocalize_min_score or trial.evidence < 0.0 or \
                 len(trial.found) >= self.cfg.max_trial_scans:

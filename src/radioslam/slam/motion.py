@@ -63,6 +63,21 @@ class MotionModel:
         """The odometry measures turns only (its positions are NaN)."""
         return self.odometry is not None and bool(np.isnan(self.odometry[:, :2]).all())
 
+    def dead_reckoning_scans(self) -> int:
+        """How many steps the full odometry alone carries a pose before its drift leaves the front end's search
+        window (3σ of the position > ``max_step_m``; σ² after n steps of its stated noise: n σ_m² for the
+        translation, σ_θ² ℓ² n³ / 3 for the heading's random walk over steps of its median length ℓ): a stretch no
+        scan fixed is lost only once it is that long. 0 without full odometry (a platform's own step is as wide
+        as the window)."""
+        if self.odometry is None or self.gyro_only:
+            return 0
+        length = np.linalg.norm(np.diff(self.odometry[:, :2], axis=0), axis=1)
+        step = float(np.median(length)) if len(length) else 0.0
+        n = np.arange(1, len(self.odometry) + 1, dtype=np.float64)
+        sigma = np.sqrt(n * self.odometry_sigmas[0] ** 2 + self.odometry_sigmas[2] ** 2 * step ** 2 * n ** 3 / 3)
+        beyond = np.flatnonzero(3 * sigma > self.max_step_m)
+        return int(n[beyond[0]]) if len(beyond) else len(self.odometry) + 1
+
     def odometry_step(self, k: int) -> np.ndarray | None:
         """The external odometry's step from pose k − 1 to k (x, y NaN for a gyro), or None."""
         if self.odometry is None or k < 1 or k >= len(self.odometry):

@@ -209,6 +209,7 @@ class SlamSession:
         if odometry is not None:
             candidates.append((Source.ODOMETRY, odometry))
         candidates += [(Source.RIVAL_BRANCH, branch) for branch in self.forks.branches(result.poses)]
+        candidates += [(Source.RIVAL_BRANCH, branch) for branch in self.lost_and_found.branches(result.poses)]
         judge = Judge.from_config(self.cfg)
         ending = judge.judge(candidates, self.loop_closer.points, motion)
         best, runner_up = ending.best, ending.runner_up
@@ -228,10 +229,11 @@ class SlamSession:
 
     def _result(self, poses: np.ndarray) -> SlamResult:
         steps, back_end, cfg = self.steps, self.back_end, self.cfg
+        carried = self.front_end.motion.dead_reckoning_scans()  # odometry keeps a stretch no scan fixed this long
         result = SlamResult(poses=poses, odometry=np.array([back_end.chain[k] for k in range(len(steps))]),
                             status=[s.status for s in steps], match_score=np.array([s.score for s in steps]),
                             loops=back_end.loops, seconds_per_scan=np.array(self.seconds),
-                            lost_after=cfg.loop_closure.relocalize_after,
-                            dead_reckoned_after=cfg.motion.dead_reckoned_scans)
+                            lost_after=max(cfg.loop_closure.relocalize_after, carried),
+                            dead_reckoned_after=max(cfg.motion.dead_reckoned_scans, carried))
         result.warnings = [f"scan {k}: {s.note}" for k, s in enumerate(steps) if s.note] + result.summary_lines()
         return result
