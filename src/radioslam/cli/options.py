@@ -53,8 +53,8 @@ CONFIG_HELP = ("YAML config file with radio:, sensing: and slam: sections (docs/
                "options given here override it")
 CHANNEL_HELP = ("where the echo paths come from: the built-in 2D caster, or Sionna RT on the scene extruded to 3D "
                 "(extrude: in the scene; pip install 'radioslam[sionna]')")
-ODOMETRY_HELP = ("relative motion from wheels or an IMU, one TUM pose per scan (its noise: slam.motion in "
-                 "--config)")
+ODOMETRY_HELP = ("relative motion from wheels or an IMU, one TUM pose per scan (its noise per step: "
+                 "slam.motion.odometry_sigma_m and odometry_sigma_deg in --config; default a loose 5 cm and 2°)")
 STRICT_HELP = ("exit with status 3 when tracking was lost (a stretch of scans matched nothing, or a long "
                "one in which none fixed one pose: a direction nothing fixes, rival poses alike), or when another "
                "trajectory is within odds of 1 : 20 of the answer (ambiguous_trajectory)")

@@ -63,7 +63,7 @@ def run(
     refine: Optional[Refinement] = opt.refine_option(),
     plot_pose: int = opt.plot_pose_option(),
     odometry: Optional[Path] = typer.Option(None, "--odometry", help=opt.ODOMETRY_HELP + "; 'simulated': the "
-                                            "scene's own (odometry.tum)"),
+                                            "scene's own (odometry.tum), at the scene's stated noise"),
     strict: bool = opt.strict_option(),
     scene_frame: bool = opt.scene_frame_option(),
     force: bool = opt.force_option(),
