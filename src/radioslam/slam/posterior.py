@@ -11,10 +11,9 @@ and the honest ending compare as log odds,
 - the step's term from :mod:`radioslam.slam.motion_prior`: the platform's step (the odometry's at its noise
   when given), or the unexpected share ε of steps spread uniformly over the area searched. A relocalization
   (a pose found anywhere within that area, :meth:`LoopCloser.relocalize`) is such a step: its prior is
-  ε / (area · 2π), which it must overcome by what the scan explains better there. With a robot's odometry
-  (ε = 10⁻³, σ 5 cm and 2°) a jump across a 40 m building costs about 23 nats against the odometry's step;
-  a kidnapped terminal, whose scans the odometry's pose contradicts outright, still pays it within a scan
-  or two.
+  ε / (area · 2π), which it must overcome by what the scan explains better there. Against odometry's step a
+  jump costs about 18–25 nats (the odometry's stated σ, the area searched), more than one scan's evidence
+  usually brings: a kidnap is confirmed by the scans after it (:mod:`radioslam.slam.lost_found`).
 
 Two placements of one scan (or two trajectories) compare by the difference of these: a likelihood ratio times
 a prior ratio, the posterior odds.
