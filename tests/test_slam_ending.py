@@ -46,9 +46,9 @@ def _in_frame(poses: np.ndarray) -> np.ndarray:
     return np.array([between(poses[0], p) for p in poses])
 
 
-def _judge(odds: float = 20.0) -> Judge:
-    return Judge.from_config(SlamConfig()) if odds == 20.0 else Judge.from_config(
-        SlamConfig.model_validate({"ending": {"odds": odds}}))
+def _judge(odds: float = 20.0, odometry=None) -> Judge:
+    cfg = SlamConfig.model_validate({"ending": {"odds": odds}})
+    return Judge.from_config(cfg, Posterior.from_config(cfg, _motion(odometry)))
 
 
 def _motion(odometry=None) -> MotionModel:
@@ -69,7 +69,7 @@ def test_a_folded_trajectory_loses_to_the_true_one():
     fold = 14
     jump = compose(truth[fold - 1], compose(np.array([0.0, 0.0, np.pi]), inverse(truth[fold - 1])))
     folded[fold:] = np.array([compose(jump, p) for p in truth[fold:]])
-    ending = _judge().judge([(Source.RIVAL_BRANCH, folded), (Source.POSE_GRAPH, truth)], scans, _motion())
+    ending = _judge().judge([(Source.RIVAL_BRANCH, folded), (Source.POSE_GRAPH, truth)], scans)
     assert ending.best.source is Source.POSE_GRAPH
     assert not ending.ambiguous and ending.runner_up_odds > 1e3
 
@@ -98,8 +98,7 @@ def test_trajectories_within_the_merge_radius_are_one_hypothesis():
     truth = _in_frame(poses)
     nudged = truth + np.random.default_rng(1).normal(0, 0.01, truth.shape) * [1, 1, 0.01]
     nudged[0] = 0.0
-    ending = _judge().judge([(Source.POSE_GRAPH, truth), (Source.RIVAL_BRANCH, nudged)], _scans(segments, poses),
-                            _motion())
+    ending = _judge().judge([(Source.POSE_GRAPH, truth), (Source.RIVAL_BRANCH, nudged)], _scans(segments, poses))
     assert [h.source for h in ending.hypotheses] == [Source.POSE_GRAPH] and not ending.ambiguous
 
 
@@ -116,11 +115,10 @@ def test_a_quarter_turn_in_a_square_is_ambiguous_and_the_alternative_kept():
     scans = _scans(segments, turned)
     still = _in_frame(poses)  # a trajectory that never turned: the room explains its scans alike
     truth = _in_frame(turned)
-    ending = _judge().judge([(Source.POSE_GRAPH, still), (Source.RIVAL_BRANCH, truth)], scans, _motion())
+    ending = _judge().judge([(Source.POSE_GRAPH, still), (Source.RIVAL_BRANCH, truth)], scans)
     assert ending.ambiguous and np.exp(2.0) < ending.runner_up_odds < 20.0
     assert ending.best.source is Source.POSE_GRAPH  # not turning is the likelier motion
-    assert not _judge(odds=5.0).judge([(Source.POSE_GRAPH, still), (Source.RIVAL_BRANCH, truth)], scans,
-                                      _motion()).ambiguous
+    assert not _judge(odds=5.0).judge([(Source.POSE_GRAPH, still), (Source.RIVAL_BRANCH, truth)], scans).ambiguous
 
 
 def test_odometry_wins_where_the_scans_cannot_tell_and_the_slam_turned_without_cause():
@@ -134,7 +132,7 @@ def test_odometry_wins_where_the_scans_cannot_tell_and_the_slam_turned_without_c
     slid = poses.copy()
     slid[5:, 0] -= 0.6
     candidates = [(Source.POSE_GRAPH, _in_frame(slid)), (Source.ODOMETRY, odometry_in_map_frame(odometry, np.zeros(3)))]
-    ending = _judge().judge(candidates, scans, _motion(odometry))
+    ending = _judge(odometry=odometry).judge(candidates, scans)
     assert ending.best.source is Source.ODOMETRY and not ending.ambiguous
 
 

@@ -8,6 +8,7 @@ import numpy as np
 from radioslam.slam.config import SlamConfig
 from radioslam.slam.loop_closer import LoopCloser
 from radioslam.slam.lost_found import LostAndFound, Trial
+from radioslam.slam.posterior import Posterior
 from radioslam.slam.status import ScanStatus
 
 
@@ -15,7 +16,7 @@ def test_a_trial_is_decided_by_enough_scans_at_the_endings_odds():
     """A trial confirms once confirm_scans scans are followed and its log posterior odds reach the ending's
     1 : odds (a probability ratio, not a tuned gain): one overwhelming scan alone does not decide it."""
     cfg = SlamConfig()
-    lost_and_found = LostAndFound.from_config(cfg, None)
+    lost_and_found = LostAndFound.from_config(cfg, Posterior.from_config(cfg, None))
     assert np.isclose(lost_and_found.bound, np.log(cfg.ending.odds))
     trial = Trial([0], np.zeros(3), [object()], log_odds=40.0)
     lost_and_found.trial = trial
@@ -63,7 +64,8 @@ ESTIMATES = {k: np.array([float(k), 0.0, 0.0]) for k in range(40)}  # the walk: 
 
 def _odds(monkeypatch, value, jump=0.0):
     """Every scan a trial opens or follows adds ``value`` to its log odds; a jump's prior odds are ``jump``."""
-    monkeypatch.setattr(LostAndFound, "log_odds", lambda *args, **kwargs: value)
+    monkeypatch.setattr(LostAndFound, "log_odds", lambda *args, **kwargs: value)  # a followed scan's
+    monkeypatch.setattr(Posterior, "log_odds", lambda *args, **kwargs: value)  # the first scan's
     monkeypatch.setattr(LostAndFound, "jump_log_odds", lambda *args, **kwargs: jump)
     monkeypatch.setattr(LostAndFound, "_front_placements", lambda self, pose, *args: pose[None])
 
@@ -90,7 +92,7 @@ def test_a_trial_that_never_gathers_enough_evidence_is_recorded_undecided(monkey
     probable opens none."""
     cfg = SlamConfig()
     lc = cfg.loop_closure
-    lost_and_found, stub = LostAndFound.from_config(cfg, None), MapStub()
+    lost_and_found, stub = LostAndFound.from_config(cfg, Posterior.from_config(cfg, None)), MapStub()
     _walk(lost_and_found, stub, [0.6] * 8, 0.1, monkeypatch)
     assert lost_and_found.trial is None  # no drop, no trial
     _odds(monkeypatch, -0.5)
@@ -121,7 +123,7 @@ def test_after_a_jump_each_scan_is_also_searched_for_where_the_terminal_was_take
     front end's pose opens a trial; one less probable opens none; once the alert is over, a scan that did
     not drop is not searched for."""
     cfg = SlamConfig()
-    lost_and_found, stub = LostAndFound.from_config(cfg, None), MapStub()
+    lost_and_found, stub = LostAndFound.from_config(cfg, Posterior.from_config(cfg, None)), MapStub()
     _walk(lost_and_found, stub, [0.6] * 8, 0.0, monkeypatch)
     estimates = _before(8)
     lost_and_found.alert, lost_and_found.taken_from = cfg.loop_closure.alert_scans, 3

@@ -229,14 +229,20 @@ class PoseGraphConfig(_Section):
     inlier_chi2: float = Field(16.27, gt=0)
 
 
-class EndingConfig(_Section):
-    """The end-of-walk comparison of trajectories (:mod:`radioslam.slam.ending`)."""
+class PosteriorConfig(_Section):
+    """The posterior of a scan's placement (:mod:`radioslam.slam.posterior`): relocalization, the trials and
+    the ending weigh placements by it."""
 
-    enabled: bool = True
     # each scan is scored against the scans before it whose poses lie within radius_m (a radio scan's
     # echoes reach a few metres to ten), at most max_scans of them, nearest first
     radius_m: float = Field(5.0, gt=0, le=100.0)
     max_scans: int = Field(30, ge=1, le=1000)
+
+
+class EndingConfig(_Section):
+    """The end-of-walk comparison of trajectories (:mod:`radioslam.slam.ending`)."""
+
+    enabled: bool = True
     # two trajectories whose every pose agrees within these are one hypothesis: they differ by how an error
     # was spread (drift, a loop's correction), not by which place a scan was taken for (a fold, a flip, a
     # wrong loop: a corridor's width, a door's spacing, a turn beyond the front end's distinct_deg)
@@ -316,6 +322,7 @@ class SlamConfig(_Section):
     loop_closure: LoopClosureConfig = Field(default_factory=LoopClosureConfig)
     pose_graph: PoseGraphConfig = Field(default_factory=PoseGraphConfig)
     plane_adjustment: PlaneAdjustmentConfig = Field(default_factory=PlaneAdjustmentConfig)
+    posterior: PosteriorConfig = Field(default_factory=PosteriorConfig)
     ending: EndingConfig = Field(default_factory=EndingConfig)
     map: MapConfig = Field(default_factory=MapConfig)
 

@@ -30,8 +30,6 @@ from enum import Enum
 
 import numpy as np
 
-from radioslam.slam.config import GridConfig
-from radioslam.slam.motion import MotionModel
 from radioslam.slam.posterior import Posterior
 from radioslam.slam.result import scan_ranges
 from radioslam.slam.scan_points import ScanPoints
@@ -101,21 +99,18 @@ class Ending:
 
 
 class Judge:
-    """Built from the likelihood grid's settings and plain values: the neighbourhood of a scan's map, when two
-    trajectories are one, and the stated odds."""
+    """Built from the posterior that weighs each scan's placement and plain values: when two trajectories are
+    one, and the stated odds."""
 
-    def __init__(self, grid: GridConfig, radius_m: float, max_scans: int, same_m: float, same_rad: float,
-                 odds: float):
-        self.grid, self.radius_m, self.max_scans = grid, radius_m, max_scans
-        self.same_m, self.same_rad, self.odds = same_m, same_rad, odds
+    def __init__(self, posterior: Posterior, same_m: float, same_rad: float, odds: float):
+        self.posterior, self.same_m, self.same_rad, self.odds = posterior, same_m, same_rad, odds
 
     @classmethod
-    def from_config(cls, cfg) -> "Judge":
+    def from_config(cls, cfg, posterior: Posterior) -> "Judge":
         e = cfg.ending
-        return cls(cfg.grid, e.radius_m, e.max_scans, e.same_m, np.radians(e.same_deg), e.odds)
+        return cls(posterior, e.same_m, np.radians(e.same_deg), e.odds)
 
-    def judge(self, candidates: list[tuple[Source, np.ndarray]], scans: dict[int, ScanPoints],
-              motion: MotionModel) -> Ending:
+    def judge(self, candidates: list[tuple[Source, np.ndarray]], scans: dict[int, ScanPoints]) -> Ending:
         """The candidates (source, (P, 3) poses), those alike merged (the first kept), scored and ranked."""
         kept: list[tuple[Source, np.ndarray]] = []
         for source, poses in candidates:
@@ -124,8 +119,7 @@ class Judge:
         scored: list[tuple[np.ndarray, list[float]]] = []  # each kept trajectory and its scans' terms
         for _, poses in kept:
             scored.append((poses, self.scan_terms(poses, scans, scored)))
-        posterior = Posterior(self.grid, self.radius_m, self.max_scans, motion)
-        hypotheses = [Hypothesis(source, poses, sum(terms, 0.0), posterior.trajectory_prior(poses))
+        hypotheses = [Hypothesis(source, poses, sum(terms, 0.0), self.posterior.trajectory_prior(poses))
                       for (source, poses), (_, terms) in zip(kept, scored)]
         return Ending(sorted(hypotheses, key=lambda h: -h.log_posterior), self.odds)
 
@@ -139,8 +133,8 @@ class Judge:
 
     def scan_terms(self, poses: np.ndarray, scans: dict[int, ScanPoints],
                    scored: list[tuple[np.ndarray, list[float]]] = ()) -> list[float]:
-        """log p(scan k | T_k, the scans before k within ``radius_m`` of T_k, at most ``max_scans``, nearest) for
-        each scan but the first (0 where none is near): each scan judged by the map from before it, never by the
+        """log p(scan k | T_k, the scans before k near T_k) (:meth:`Posterior.scan_term`) for each scan but the
+        first (0 where none is near): each scan judged by the map from before it, never by the
         scans that follow it on its own branch (a wrong branch agrees with itself). A scan's term depends on the
         poses up to its own alone: where ``poses`` begin as one of the trajectories ``scored`` (with their terms)
         does, those scans' terms are its (a rival branch shares the answer's poses up to its fork)."""
@@ -150,8 +144,7 @@ class Judge:
             differ = np.flatnonzero(np.any(other != poses, axis=1))
             if (same := int(differ[0]) if len(differ) else len(poses)) > shared:
                 shared, reused = same, terms
-        posterior = Posterior(self.grid, self.radius_m, self.max_scans, None)
-        return [reused[i - 1] if k < shared else posterior.scan_term(scans[k], poses[k], keys[:i], poses, scans)
+        return [reused[i - 1] if k < shared else self.posterior.scan_term(scans[k], poses[k], keys[:i], poses, scans)
                 for i, k in enumerate(keys[1:], start=1)]
 
     def warning(self, best: Hypothesis, runner_up: Hypothesis, odds: float, status: list, odometry: bool) -> str:

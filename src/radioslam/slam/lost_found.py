@@ -162,20 +162,16 @@ class LostAndFound:
 
     def log_odds(self, k: int, points: ScanPoints, place: np.ndarray, fronts: np.ndarray, keys: list[int],
                  places: dict[int, np.ndarray], estimates: dict[int, np.ndarray], scans: dict[int, ScanPoints],
-                 area_m2: float | None = None, velocity=None) -> float:
-        """Scan k's log posterior at the trial's ``place`` (the map ``keys`` at the trial's ``places``, its step
-        from its last place with its own ``velocity``) less that of the no-jump hypothesis: the better of its
-        placements ``fronts`` (F, 3: the front end's pose, and its best fit within a step: a front end that
-        slipped was not carried away), against the map at the front end's ``estimates`` with the walk's motion;
-        ``area_m2``: the trial's first scan, a jump whose unexpected share is spread over the area searched
-        (every placement under that one prior)."""
+                 velocity=None) -> float:
+        """A followed scan k's log posterior at the trial's ``place`` (the map ``keys`` at the trial's ``places``,
+        its step from its last place with its own ``velocity``) less that of the no-jump hypothesis: the better
+        of its placements ``fronts`` (F, 3: the front end's pose, and its best fit within a step: a front end
+        that slipped was not carried away), against the map at the front end's ``estimates`` with the walk's
+        motion. Each hypothesis is judged by its own map (the chain rule)."""
         post = self.posterior
-        first = area_m2 is not None  # the first scan: every step from the front end's last pose
-        last_place = estimates[k - 1] if first else LoopCloser.placed_pose(self.trial.found[-1], estimates)
-        trial = post.placement(k, points, place, last_place, keys, places, scans, area_m2,
-                               KEEP if first else velocity)
-        front = max(post.placement(k, points, pose, estimates[k - 1], keys, estimates, scans, area_m2)
-                    for pose in fronts)
+        last_place = LoopCloser.placed_pose(self.trial.found[-1], estimates)
+        trial = post.placement(k, points, place, last_place, keys, places, scans, velocity=velocity)
+        front = max(post.placement(k, points, pose, estimates[k - 1], keys, estimates, scans) for pose in fronts)
         return trial - front
 
     def _front_placements(self, pose: np.ndarray, points: ScanPoints, grid: LikelihoodGrid, normals: np.ndarray,
@@ -232,7 +228,8 @@ class LostAndFound:
                fronts: np.ndarray) -> bool:
         """A trial opened by ``found`` (at ``place``) if the scan itself is more probable there than at the front
         end's ``fronts``: the jump's prior is paid by the scans that follow, or the trial fails."""
-        odds = self.log_odds(k, points, place, fronts, keys, estimates, estimates, loop_closer.points, area_m2)
+        odds = self.posterior.log_odds(k, points, place, fronts, estimates[k - 1], keys, estimates,
+                                       loop_closer.points, area_m2)
         jump = self.jump_log_odds(k, place, pose, estimates, area_m2)
         if odds - jump <= 0.0:
             return False

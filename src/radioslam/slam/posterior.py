@@ -42,7 +42,7 @@ class Posterior:
 
     @classmethod
     def from_config(cls, cfg, motion: MotionModel) -> "Posterior":
-        return cls(cfg.grid, cfg.ending.radius_m, cfg.ending.max_scans, motion)
+        return cls(cfg.grid, cfg.posterior.radius_m, cfg.posterior.max_scans, motion)
 
     def nearby(self, pose: np.ndarray, earlier: list[int], poses) -> list[int]:
         """The scans of ``earlier`` whose ``poses`` (indexable by key) lie within ``radius_m`` of ``pose``, at most
@@ -79,6 +79,15 @@ class Posterior:
         scan's term and the step's."""
         return self.scan_term(points, pose, earlier, poses, scans) + \
             self.step_term(k, last, pose, area_m2, velocity)
+
+    def log_odds(self, k: int, points: ScanPoints, place: np.ndarray, rivals: np.ndarray, last: np.ndarray,
+                 earlier: list[int], poses, scans: dict[int, ScanPoints], area_m2: float | None = None) -> float:
+        """log p(T_k = ``place``) − max_r log p(T_k = rival r) for scan k under one map (``earlier`` at ``poses``)
+        and one step's prior from ``last``: the posterior odds of a far placement (a relocalization, a trial's
+        first scan) against the no-jump hypothesis' placements ``rivals`` (R, 3), the jump's unexpected share
+        spread over ``area_m2``."""
+        return self.placement(k, points, place, last, earlier, poses, scans, area_m2) - \
+            max(self.placement(k, points, rival, last, earlier, poses, scans, area_m2) for rival in rivals)
 
     def trajectory_prior(self, poses: np.ndarray) -> float:
         """Σ_k log p(step k) of a whole trajectory, each step's hypotheses those of its own last step (and the

@@ -140,14 +140,12 @@ class SlamSession:
         return ScanUpdate(k, np.array(back_end.estimates[k]), self.steps[k].status, self.seconds[-1])
 
     def _relocation_log_odds(self, k: int, found: LoopClosure, step: Step, points) -> float:
-        """Scan k's log posterior odds at the place relocalization ``found`` against the front end's pose: the
-        map before it explaining each, and the step from pose k − 1 to each under the motion prior whose
-        unexpected share covers the area searched."""
-        estimates, scans = self.back_end.estimates, self.loop_closer.points
-        earlier, last = self.loop_closer.map_keys(k, before=k), estimates[k - 1]
-        return self.posterior.placement(k, points, self.back_end.relocalized_pose(found), last, earlier, estimates,
-                                        scans, found.searched_m2) - \
-            self.posterior.placement(k, points, step.pose, last, earlier, estimates, scans, found.searched_m2)
+        """Scan k's log posterior odds at the place relocalization ``found`` against the front end's pose, under
+        the map before it (:meth:`Posterior.log_odds`)."""
+        estimates = self.back_end.estimates
+        return self.posterior.log_odds(k, points, self.back_end.relocalized_pose(found), step.pose[None],
+                                       estimates[k - 1], self.loop_closer.map_keys(k, before=k), estimates,
+                                       self.loop_closer.points, found.searched_m2)
 
     def _decide(self, k: int, decided: Decision | None, loops: list[LoopClosure]) -> list[LoopClosure]:
         """A fork decided at scan k: its rival's poses taken; the loops of scan k that still hold."""
@@ -210,8 +208,8 @@ class SlamSession:
             candidates.append((Source.ODOMETRY, odometry))
         candidates += [(Source.RIVAL_BRANCH, branch) for branch in self.forks.branches(result.poses)]
         candidates += [(Source.RIVAL_BRANCH, branch) for branch in self.lost_and_found.branches(result.poses)]
-        judge = Judge.from_config(self.cfg)
-        ending = judge.judge(candidates, self.loop_closer.points, motion)
+        judge = Judge.from_config(self.cfg, self.posterior)
+        ending = judge.judge(candidates, self.loop_closer.points)
         best, runner_up = ending.best, ending.runner_up
         lines = []
         if best.source is not Source.POSE_GRAPH:
