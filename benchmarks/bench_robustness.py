@@ -12,11 +12,13 @@ same scans.
 
     python benchmarks/bench_robustness.py [--quick] [--seed 0] [--family office] [--only NAME]
                                           [--jobs 2] [--cache DIR] [--no-peers] [--perturb-m 1e-6]
-                                          [--json rows.json]
+                                          [--draws 10] [--json rows.json]
 
 ``--perturb-m`` moves every range by a uniform draw within ± that bound (one Generator per case,
 seeded by the case): the SLAM's results are chaotic in their inputs, so a perturbed suite is a
-second sample of the same cases to judge a change on (issue #12 notes, session 4).
+second sample of the same cases to judge a change on (issue #12 notes, session 4). ``--draws N`` is the
+stability check (issue #47): each case unperturbed and on N draws of 1 µm range moves, the spread of its ATE
+(max − min), the share of runs moving by ≤ 1 cm and the runs crossing between success and failure.
 
 Scans are cached per case (``--cache``, default ``~/.cache/radioslam/robustness``): the
 simulation and sensing take most of the time and do not change when the SLAM does.
@@ -32,7 +34,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-from bench_stability import perturbed
+from bench_stability import PERTURBATION_M, perturbed
 from suites import BUILDING_SUCCESS_M, CONFIDENT_M, ROOM_SUCCESS_M, BenchCase, benchmark_suite
 
 from radioslam.eval.trajectory_metrics import ate_rmse
@@ -46,6 +48,7 @@ from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, load_slam_config
 
 FIELDS = ("range_m", "angle_rad", "power_db", "beam", "orientation")
 FAR_LOOP_M = 4.0  # a loop closure tying scans farther apart than this in truth is wrong
+STEADY_M = 0.01  # the stability check: a run whose ATE moves by no more than this under 1 µm range moves
 
 
 def cache_file(scene: Scene, seed: int, cache: Path) -> Path:
@@ -78,10 +81,11 @@ def sensed_scans(case: BenchCase, cache: Path) -> list[Scan]:
 
 
 def run_case(case: BenchCase, cache: Path, peers: bool = True, perturb_m: float = 0.0,
-             config: SlamConfig | None = None) -> dict:
+             config: SlamConfig | None = None, draw: int | None = None) -> dict:
     scans = sensed_scans(case, cache)
-    if perturb_m > 0:
-        scans = perturbed(scans, np.random.default_rng(case.seed), perturb_m)
+    if perturb_m > 0:  # one Generator per case (and per draw of the stability check)
+        rng = np.random.default_rng(case.seed if draw is None else [case.seed, draw])
+        scans = perturbed(scans, rng, perturb_m)
     truth, odometry = case.scene.poses, case.odometry()
     if odometry is not None:  # the SLAM told the odometry's stated noise, as a run on the scene's odometry is
         config = (config or SlamConfig()).with_odometry_noise(*per_step_sigmas(case.scene.spec.odometry, truth))
@@ -234,10 +238,36 @@ def summary(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def _run(args_case) -> dict:
-    case, args = args_case
+def stability(rows: list[dict], draws: int) -> str:
+    """Each case's ATE unperturbed and over ``draws`` draws of its ranges moved within ±``perturb`` (issue #47:
+    ≥ 98 % of runs move by ≤ 1 cm, max − min, and none crosses between success and failure)."""
+    per_case: dict[str, list[dict]] = {}
+    for r in rows:
+        per_case.setdefault(r["case"], []).append(r)
+    lines, spreads, crossed = [f"{'case':40} {'ATE':>7} {'min':>7} {'max':>7} {'max − min':>9}  success"], {}, []
+    for name, runs in per_case.items():
+        if any("crashed" in r for r in runs):
+            spreads[name], success = float("inf"), {"crashed"}
+        else:
+            ate = np.array([r["ate_m"] for r in runs])
+            spreads[name], success = float(ate.max() - ate.min()), {r["success"] for r in runs}
+        if len(success) > 1:
+            crossed.append(name)
+        base = runs[0].get("ate_m", float("nan"))
+        lines.append(f"{name:40} {base:7.3f} {min(r.get('ate_m', np.inf) for r in runs):7.3f} "
+                     f"{max(r.get('ate_m', np.inf) for r in runs):7.3f} {spreads[name]:9.4f}  "
+                     + "".join("c" if "crashed" in r else "y" if r["success"] else "n" for r in runs))
+    steady = sum(spread <= STEADY_M for spread in spreads.values())
+    lines += ["", f"stability over {draws} draws of 1 µm range moves: {steady}/{len(spreads)} = "
+              f"{100 * steady / len(spreads):.0f} % of runs move by ≤ {STEADY_M * 100:.0f} cm (target ≥ 98 %); "
+              f"crossing success and failure: {len(crossed)} {crossed} (target 0)"]
+    return "\n".join(lines)
+
+
+def _run(job) -> dict:
+    case, args, perturb_m, draw = job
     config = load_slam_config(args.config) if args.config else None
-    return run_case(case, args.cache, not args.no_peers, args.perturb_m, config)
+    return run_case(case, args.cache, not args.no_peers, perturb_m, config, draw)
 
 
 def main() -> None:
@@ -253,7 +283,12 @@ def main() -> None:
     ap.add_argument("--only", help="run the cases whose name contains this")
     ap.add_argument("--config", type=Path, help="YAML file whose slam: section sets the SLAM")
     ap.add_argument("--perturb-m", type=float, default=0.0, help="every range moved within ± this (seeded per case)")
+    ap.add_argument("--draws", type=int, default=0,
+                    help="the stability check: each case also run on this many draws of ranges moved within "
+                         "± --perturb-m (1 µm unless given), the spread of its ATE printed")
     args = ap.parse_args()
+    if args.draws and not args.perturb_m:
+        args.perturb_m = PERTURBATION_M
     cases = benchmark_suite(args.seed, args.quick, args.building_seed)
     if args.family:
         cases = [c for c in cases if c.family == args.family]
@@ -261,7 +296,14 @@ def main() -> None:
         cases = [c for c in cases if args.only in c.name]
     with ProcessPoolExecutor(args.jobs) as pool:  # sense uncached cases in parallel, then map them
         list(pool.map(sensed_scans, cases, [args.cache] * len(cases)))
-        rows = list(pool.map(_run, [(c, args) for c in cases]))
+        # with --draws each case runs unperturbed first, then once per draw
+        jobs = [(c, args, 0.0, None) for c in cases] if args.draws else [(c, args, args.perturb_m, None) for c in cases]
+        jobs += [(c, args, args.perturb_m, d) for c in cases for d in range(args.draws)]
+        rows = list(pool.map(_run, jobs))
+    if args.draws:
+        print(stability(rows, args.draws))
+        rows = rows[:len(cases)]
+        print()
     print(table(rows))
     print()
     print(summary(rows))
