@@ -287,18 +287,21 @@ class Forks:
             on_free, points = chosen_on_free[fork.key]
             if not self._contradicted(on_free, points):
                 continue
+            best = self.rival_loops.get(name)
+            # no rival loop: an exploring rival closes none (a corridor's corner taken for the corridor folded
+            # back onto itself); the contradiction alone decides, at the square of the significance
+            looped = best is not None and best.score > (1.0 + self.cfg.fork_gain) * self.chosen_scores[fork.key]
+            level = self.cfg.fork_significance ** (1 if looped or last else 2)
+            if not self._contradicted_more(on_free, 0, level):
+                continue  # too few of the chosen branch's points on free space even against none of the rival's
             placed = self._placed(fork, k, estimates, loop_closer.points, jump)
             rival_on_free = self._on_free(fork, k, estimates, loop_closer.points, placed)[0]
             switches = placed_switches(switches, placed)
-            best = self.rival_loops.get(name)
-            if best is None or best.score <= (1.0 + self.cfg.fork_gain) * self.chosen_scores[fork.key]:
-                # no rival loop: an exploring rival closes none (a corridor's corner taken for the corridor
-                # folded back onto itself); the contradiction alone decides, at the square of the significance
-                if self._contradicted_more(on_free, rival_on_free, self.cfg.fork_significance ** (1 if last else 2)):
-                    unlooped.append((rival_on_free, fork.key, fork, switches))
-                continue
-            if not self._contradicted_more(on_free, rival_on_free):
+            if not self._contradicted_more(on_free, rival_on_free, level):
                 continue  # the chosen branch disagrees with the map from before the fork no more than the rival
+            if not looped:
+                unlooped.append((rival_on_free, fork.key, fork, switches))
+                continue
             self.open = [f for f in self.open if f.key < fork.key]
             return Decision(switches, best)
         if unlooped:  # the rival the map from before contradicts least
