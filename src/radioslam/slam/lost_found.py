@@ -41,7 +41,7 @@ import numpy as np
 from radioslam.slam.config import LoopClosureConfig
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
-from radioslam.slam.posterior import KEEP, Posterior
+from radioslam.slam.posterior import Posterior
 from radioslam.slam.scan_points import ScanPoints
 from radioslam.slam.se2 import between, compose, inverse
 from radioslam.slam.status import ScanStatus
