@@ -238,9 +238,10 @@ def summary(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def stability(rows: list[dict], draws: int) -> str:
-    """Each case's ATE unperturbed and over ``draws`` draws of its ranges moved within ±``perturb`` (issue #47:
-    ≥ 98 % of runs move by ≤ 1 cm, max − min, and none crosses between success and failure)."""
+def stability(rows: list[dict], draws: int, bound_m: float) -> str:
+    """Each case's ATE unperturbed (its first row) and over ``draws`` draws of its ranges moved within
+    ±``bound_m`` (issue #47: ≥ 98 % of runs move by ≤ 1 cm, max − min, and none crosses between success and
+    failure)."""
     per_case: dict[str, list[dict]] = {}
     for r in rows:
         per_case.setdefault(r["case"], []).append(r)
@@ -258,7 +259,7 @@ def stability(rows: list[dict], draws: int) -> str:
                      f"{max(r.get('ate_m', np.inf) for r in runs):7.3f} {spreads[name]:9.4f}  "
                      + "".join("c" if "crashed" in r else "y" if r["success"] else "n" for r in runs))
     steady = sum(spread <= STEADY_M for spread in spreads.values())
-    lines += ["", f"stability over {draws} draws of 1 µm range moves: {steady}/{len(spreads)} = "
+    lines += ["", f"stability over {draws} draws of {bound_m * 1e6:g} µm range moves: {steady}/{len(spreads)} = "
               f"{100 * steady / len(spreads):.0f} % of runs move by ≤ {STEADY_M * 100:.0f} cm (target ≥ 98 %); "
               f"crossing success and failure: {len(crossed)} {crossed} (target 0)"]
     return "\n".join(lines)
@@ -297,11 +298,12 @@ def main() -> None:
     with ProcessPoolExecutor(args.jobs) as pool:  # sense uncached cases in parallel, then map them
         list(pool.map(sensed_scans, cases, [args.cache] * len(cases)))
         # with --draws each case runs unperturbed first, then once per draw
-        jobs = [(c, args, 0.0, None) for c in cases] if args.draws else [(c, args, args.perturb_m, None) for c in cases]
-        jobs += [(c, args, args.perturb_m, d) for c in cases for d in range(args.draws)]
+        first = 0.0 if args.draws else args.perturb_m
+        jobs = [(c, args, first, None) for c in cases] + [(c, args, args.perturb_m, d) for c in cases
+                                                          for d in range(args.draws)]
         rows = list(pool.map(_run, jobs))
     if args.draws:
-        print(stability(rows, args.draws))
+        print(stability(rows, args.draws, args.perturb_m))
         rows = rows[:len(cases)]
         print()
     print(table(rows))
