@@ -9,6 +9,7 @@ from radioslam.slam.config import SlamConfig
 from radioslam.slam.loop_closer import LoopCloser
 from radioslam.slam.lost_found import LostAndFound, Trial
 from radioslam.slam.posterior import Posterior
+from radioslam.slam.rivals import Rivals
 from radioslam.slam.status import ScanStatus
 
 
@@ -16,7 +17,7 @@ def test_a_trial_is_decided_by_enough_scans_at_the_endings_odds():
     """A trial confirms once confirm_scans scans are followed and its log posterior odds reach the ending's
     1 : odds (a probability ratio, not a tuned gain): one overwhelming scan alone does not decide it."""
     cfg = SlamConfig()
-    lost_and_found = LostAndFound.from_config(cfg, Posterior.from_config(cfg, None))
+    lost_and_found = LostAndFound.from_config(cfg, Posterior.from_config(cfg, None), Rivals())
     assert np.isclose(lost_and_found.bound, np.log(cfg.ending.odds))
     trial = Trial([0], np.zeros(3), [object()], log_odds=40.0)
     lost_and_found.trial = trial
@@ -92,7 +93,7 @@ def test_a_trial_that_never_gathers_enough_evidence_is_recorded_undecided(monkey
     probable opens none."""
     cfg = SlamConfig()
     lc = cfg.loop_closure
-    lost_and_found, stub = LostAndFound.from_config(cfg, Posterior.from_config(cfg, None)), MapStub()
+    lost_and_found, stub = LostAndFound.from_config(cfg, Posterior.from_config(cfg, None), Rivals()), MapStub()
     _walk(lost_and_found, stub, [0.6] * 8, 0.1, monkeypatch)
     assert lost_and_found.trial is None  # no drop, no trial
     _odds(monkeypatch, -0.5)
@@ -123,7 +124,7 @@ def test_after_a_jump_each_scan_is_also_searched_for_where_the_terminal_was_take
     front end's pose opens a trial; one less probable opens none; once the alert is over, a scan that did
     not drop is not searched for."""
     cfg = SlamConfig()
-    lost_and_found, stub = LostAndFound.from_config(cfg, Posterior.from_config(cfg, None)), MapStub()
+    lost_and_found, stub = LostAndFound.from_config(cfg, Posterior.from_config(cfg, None), Rivals()), MapStub()
     _walk(lost_and_found, stub, [0.6] * 8, 0.0, monkeypatch)
     estimates = _before(8)
     lost_and_found.alert, lost_and_found.taken_from = cfg.loop_closure.alert_scans, 3

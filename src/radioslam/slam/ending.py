@@ -2,9 +2,11 @@
 by their log posteriors, the best is the answer, and a runner-up within stated odds is reported with it.
 
 The hypotheses: the pose graph's solution (with the plane adjustment), the external odometry when given
-(placed at the first pose), and the branches of the forks still open at the end (an ambiguous scan's
-rival, every later pose carried with it: :mod:`radioslam.slam.forks`). The front end's own chain is no
-hypothesis here: it is greedy in exactly this likelihood (each scan placed on its predecessors), and beat
+(placed at the first pose), and every decision's alternative (:mod:`radioslam.slam.rivals`: an ambiguous
+scan's turned rival, the branch a fork's decision left, the pose a relocalization replaced, the walk without a
+confirmed jump; each the answer with that one step replaced, every later pose carried with it; the
+``ending.hypotheses`` of highest posterior at their own scan, :meth:`Judge.shortlist`). The front end's own
+chain is no hypothesis here: it is greedy in exactly this likelihood (each scan placed on its predecessors), and beat
 the loop-corrected trajectory on it where the latter was ten times closer to the truth (docs/notes.md,
 session 28). Two that agree (every pose within ``same_m`` and ``same_deg``) are one. Each trajectory T scores
 
@@ -30,10 +32,10 @@ from enum import Enum
 
 import numpy as np
 
-from radioslam.slam.posterior import Posterior
+from radioslam.slam.posterior import Posterior, extent_m2
 from radioslam.slam.result import scan_ranges
 from radioslam.slam.scan_points import ScanPoints
-from radioslam.slam.se2 import compose, inverse, wrap_angle
+from radioslam.slam.se2 import between, compose, inverse, wrap_angle
 from radioslam.slam.status import ScanStatus
 
 
@@ -116,12 +118,30 @@ class Judge:
         for source, poses in candidates:
             if not any(self._alike(poses, other) for _, other in kept):
                 kept.append((source, poses))
-        scored: list[tuple[np.ndarray, list[float]]] = []  # each kept trajectory and its scans' terms
+        scored: list[Scored] = []
         for _, poses in kept:
-            scored.append((poses, self.scan_terms(poses, scans, scored)))
-        hypotheses = [Hypothesis(source, poses, sum(terms, 0.0), self.posterior.trajectory_prior(poses))
-                      for (source, poses), (_, terms) in zip(kept, scored)]
+            scored.append(self.scan_terms(poses, scans, scored))
+        hypotheses = [Hypothesis(source, poses, sum(s.terms, 0.0), self.posterior.trajectory_prior(poses))
+                      for (source, poses), s in zip(kept, scored)]
         return Ending(sorted(hypotheses, key=lambda h: -h.log_posterior), self.odds)
+
+    def shortlist(self, branches: list[tuple[int, np.ndarray]], scans: dict[int, ScanPoints],
+                  count: int) -> list[np.ndarray]:
+        """The ``count`` branches (fork scan, (P, 3) poses) of highest posterior at their fork scan: its term
+        against the scans before it (the answer's, where the branch begins as the answer) and the step into it
+        given the step before (:meth:`Posterior.placement`); each kept alternative then costs a scoring of
+        the whole walk, where this costs one scan."""
+        if len(branches) <= count:
+            return [poses for _, poses in branches]
+        keys = sorted(scans)
+        placed = []
+        for key, poses in branches:
+            velocity = between(poses[key - 2], poses[key - 1]) if key >= 2 else None
+            earlier = [m for m in keys if m < key]
+            term = self.posterior.scan_term(scans[key], poses[key], earlier, poses, scans) if key in scans else 0.0
+            placed.append(term + self.posterior.step_term(key, poses[key - 1], poses[key], extent_m2(poses), velocity))
+        best = np.argsort(-np.array(placed), kind="stable")[:count]
+        return [branches[i][1] for i in sorted(best)]
 
     def apart(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """(P,) the poses where two trajectories differ by more than ``same_m`` or ``same_rad``."""
@@ -131,21 +151,37 @@ class Judge:
     def _alike(self, a: np.ndarray, b: np.ndarray) -> bool:
         return not self.apart(a, b).any()
 
-    def scan_terms(self, poses: np.ndarray, scans: dict[int, ScanPoints],
-                   scored: list[tuple[np.ndarray, list[float]]] = ()) -> list[float]:
+    def scan_terms(self, poses: np.ndarray, scans: dict[int, ScanPoints], scored: list["Scored"] = ()) -> "Scored":
         """log p(scan k | T_k, the scans before k near T_k) (:meth:`Posterior.scan_term`) for each scan but the
-        first (0 where none is near): each scan judged by the map from before it, never by the
-        scans that follow it on its own branch (a wrong branch agrees with itself). A scan's term depends on the
-        poses up to its own alone: where ``poses`` begin as one of the trajectories ``scored`` (with their terms)
-        does, those scans' terms are its (a rival branch shares the answer's poses up to its fork)."""
+        first (0 where none is near): each scan judged by the map from before it, never by the scans that
+        follow it on its own branch (a wrong branch agrees with itself).
+
+        A term is the same number on two trajectories wherever it is judged alike, and then taken from the one
+        ``scored`` already: a scan's term depends on the poses up to its own alone, so where ``poses`` begin as
+        a scored trajectory does, those scans' terms are its; and the likelihood of a scan against its map is
+        unchanged by a rigid motion of both, so where ``poses`` go on as that trajectory carried rigidly (a
+        rival branch: the answer with one step replaced), a scan judged against the same scans, all of them
+        carried too, scores that trajectory's term. Only the scans whose map the branch changes are judged
+        again: the fork's and those that come back near the scans before it."""
         keys = sorted(scans)
-        shared, reused = 0, []
-        for other, terms in scored:
-            differ = np.flatnonzero(np.any(other != poses, axis=1))
+        other, shared = None, 0
+        for candidate in scored:
+            differ = np.flatnonzero(np.any(candidate.poses != poses, axis=1))
             if (same := int(differ[0]) if len(differ) else len(poses)) > shared:
-                shared, reused = same, terms
-        return [reused[i - 1] if k < shared else self.posterior.scan_term(scans[k], poses[k], keys[:i], poses, scans)
-                for i, k in enumerate(keys[1:], start=1)]
+                other, shared = candidate, same
+        rigid = other is not None and shared < len(poses) and carried_rigidly(other.poses, poses, shared)
+        terms, near = [], []
+        for i, k in enumerate(keys[1:], start=1):
+            if k < shared:
+                terms.append(other.terms[i - 1])
+                near.append(other.near[i - 1])
+                continue
+            around = self.posterior.nearby(poses[k], keys[:i], poses)
+            alike = rigid and around == other.near[i - 1] and all(m >= shared for m in around)
+            terms.append(other.terms[i - 1] if alike else
+                         self.posterior.scan_term(scans[k], poses[k], keys[:i], poses, scans, around))
+            near.append(around)
+        return Scored(poses, terms, near)
 
     def warning(self, best: Hypothesis, runner_up: Hypothesis, odds: float, status: list, odometry: bool) -> str:
         """One line: the two trajectories, their odds, where they part (the scans beyond ``same_m`` or
@@ -169,6 +205,24 @@ class Judge:
         return (f"ambiguous trajectory: the {runner_up.source.value}'s {standing} the {best.source.value}'s "
                 f"answer (scans {scan_ranges(apart.tolist())} differ): {why}; it is written as "
                 f"trajectory_alternative.tum; what would help: {helps}")
+
+
+@dataclass(frozen=True)
+class Scored:
+    """A trajectory's scan terms (one per scan but the first) and the scans each was judged against."""
+
+    poses: np.ndarray
+    terms: list[float]
+    near: list[list[int]]
+
+
+def carried_rigidly(a: np.ndarray, b: np.ndarray, start: int, tolerance: float = 1e-9) -> bool:
+    """Whether poses ``b[start:]`` are ``a[start:]`` carried by one rigid transform."""
+    jump = compose(b[start], inverse(a[start]))
+    carried = np.array([compose(jump, pose) for pose in a[start:]])
+    d = carried - b[start:]
+    d[:, 2] = wrap_angle(d[:, 2])
+    return bool(np.abs(d).max() <= tolerance)
 
 
 def odometry_in_map_frame(odometry: np.ndarray, first_pose: np.ndarray) -> np.ndarray | None:

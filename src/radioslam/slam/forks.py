@@ -133,17 +133,9 @@ class Forks:
         return cls(cfg.loop_closure, np.radians(cfg.front_end.distinct_deg), cfg.grid.branch_levels,
                    np.radians(cfg.front_end.angle_step_deg))
 
-    def branches(self, poses: np.ndarray) -> list[np.ndarray]:
-        """The trajectories (P, 3) the open forks' rivals give ``poses``: each rival's step into its fork scan,
-        every later pose carried with it (the walk's end: the alternatives no scan decided)."""
-        out = []
-        for fork in self.open:
-            for rival in fork.rivals:
-                jump = compose(compose(poses[fork.key - 1], rival), inverse(poses[fork.key]))
-                branch = poses.copy()
-                branch[fork.key:] = [compose(jump, pose) for pose in poses[fork.key:]]
-                out.append(branch)
-        return out
+    def turned(self, step: Step) -> np.ndarray:
+        """(R, 3) the rivals of ``step`` turned at least ``turn_rad`` from its pose: those a fork remembers."""
+        return step.rivals[np.abs(wrap_angle(step.rivals[:, 2] - step.pose[2])) >= self.turn_rad]
 
     def remember(self, k: int, step: Step, estimates: dict[int, np.ndarray], loop_closer: LoopCloser) -> None:
         """Scan k's turned rivals, if any (once pose k − 1 and k are in ``estimates``), with the map before
@@ -151,7 +143,7 @@ class Forks:
         self.open = [f for f in self.open if k - f.key <= self.cfg.fork_memory]
         if k - 1 not in estimates or not len(step.rivals) or not self.cfg.fork_limit:
             return
-        turned = step.rivals[np.abs(wrap_angle(step.rivals[:, 2] - step.pose[2])) >= self.turn_rad]
+        turned = self.turned(step)
         keys = loop_closer.map_keys(k, before=k)
         if not len(turned) or not keys:
             return

@@ -18,7 +18,8 @@ scan by scan and weighed by its posterior odds (:mod:`radioslam.slam.posterior`)
    scans at the front end's poses, the walk's motion): each hypothesis explains its own scans alike, a
    fair comparison; the sum is the log posterior odds of the two trajectories since the drop, a sequential
    test (Wald's SPRT). Once ``confirm_scans`` scans are followed and the odds reach the ending's 1 : ``odds``,
-   the trial is confirmed and all of them are relocalized. The scans' own evidence below evens (the front
+   the trial is confirmed and all of them are relocalized (the walk without the jump kept as a rival,
+   :mod:`radioslam.slam.rivals`). The scans' own evidence below evens (the front
    end explains them better together, before any jump), a place scoring below ``relocalize_min_score`` or
    ``max_trial_scans`` scans undecided end it.
 
@@ -42,6 +43,7 @@ from radioslam.slam.config import LoopClosureConfig
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
 from radioslam.slam.posterior import Posterior
+from radioslam.slam.rivals import Cause, Rivals
 from radioslam.slam.scan_points import ScanPoints
 from radioslam.slam.se2 import between, compose, inverse
 from radioslam.slam.status import ScanStatus
@@ -91,15 +93,14 @@ class Trial:
 class LostAndFound:
     """Opens, follows and decides trials; ``observe`` once per registered scan. A followed scan is
     searched for within ``max_step_m`` of the trial's latest place; ``posterior`` weighs the two
-    hypotheses, and ``odds`` confirm one."""
+    hypotheses, and ``odds`` confirm one; a confirmed jump leaves the walk without it in ``rivals``."""
 
-    def __init__(self, cfg: LoopClosureConfig, max_step_m: float, posterior: Posterior, odds: float):
-        self.cfg, self.max_step_m, self.posterior, self.odds = cfg, max_step_m, posterior, odds
+    def __init__(self, cfg: LoopClosureConfig, max_step_m: float, posterior: Posterior, odds: float, rivals: Rivals):
+        self.cfg, self.max_step_m, self.posterior, self.odds, self.rivals = cfg, max_step_m, posterior, odds, rivals
         self.scores: list[float] = []  # the front end's scores of tracked scans
         self.trial: Trial | None = None
         self.alert = 0  # scans left after a confirmed jump during which each is also searched for where it was taken
         self.taken_from: int | None = None  # the last scan before that jump
-        self.taken: list[tuple[int, np.ndarray]] = []  # each confirmed trial's first scan and the no-jump step into it
         # the scans of each trial that ended undecided: followed for at least confirm_scans scans, its odds
         # within the stated ones of the front end's poses
         self.undecided: list[list[int]] = []
@@ -110,19 +111,8 @@ class LostAndFound:
         return float(np.log(self.odds))
 
     @classmethod
-    def from_config(cls, cfg, posterior: Posterior) -> "LostAndFound":
-        return cls(cfg.loop_closure, cfg.motion.max_step_m, posterior, cfg.ending.odds)
-
-    def branches(self, poses: np.ndarray) -> list[np.ndarray]:
-        """The trajectories (P, 3) without each confirmed jump: ``poses`` from its first scan on carried back onto
-        the front end's step there (the walk's end: a jump is a hypothesis, its alternative kept for the ending)."""
-        out = []
-        for key, step in self.taken:
-            back = compose(compose(poses[key - 1], step), inverse(poses[key]))
-            branch = poses.copy()
-            branch[key:] = [compose(back, pose) for pose in poses[key:]]
-            out.append(branch)
-        return out
+    def from_config(cls, cfg, posterior: Posterior, rivals: Rivals) -> "LostAndFound":
+        return cls(cfg.loop_closure, cfg.motion.max_step_m, posterior, cfg.ending.odds, rivals)
 
     def forget(self) -> None:
         """Drop the open trial (the poses it was followed from have moved)."""
@@ -149,7 +139,7 @@ class LostAndFound:
         if status in TRACKED and np.isfinite(score):
             self.scores.append(score)
         if self.decided():
-            self.taken.append((self.trial.found[0].key, self.trial.step))
+            self.rivals.keep(self.trial.found[0].key, self.trial.step, Cause.JUMP)  # the walk without the jump
             found, self.trial = self.trial.found, None
             self.alert, self.taken_from = self.cfg.alert_scans, found[0].key - 1
             return found

@@ -55,10 +55,10 @@ class Posterior:
         return sorted(keys[order[distance[order] <= self.radius_m]].tolist())
 
     def scan_term(self, points: ScanPoints, pose: np.ndarray, earlier: list[int], poses,
-                  scans: dict[int, ScanPoints]) -> float:
+                  scans: dict[int, ScanPoints], near: list[int] | None = None) -> float:
         """log p(scan | ``pose``, the scans of ``earlier`` near it at ``poses``) (0 where none is near: no map,
-        no evidence)."""
-        near = self.nearby(pose, earlier, poses)
+        no evidence); ``near``: those scans, where already known (:meth:`nearby`)."""
+        near = self.nearby(pose, earlier, poses) if near is None else near
         if not near:
             return 0.0
         grid, _ = map_grid(near, {m: poses[m] for m in near}, scans, self.grid, observed=True)

@@ -31,6 +31,7 @@ from radioslam.slam.occupancy import OccupancyGrid
 from radioslam.slam.plane_adjustment import PlaneAdjustment
 from radioslam.slam.posterior import Posterior
 from radioslam.slam.result import SlamResult
+from radioslam.slam.rivals import Cause, Rivals
 from radioslam.slam.scan_points import fused_points, prepare_points
 from radioslam.slam.status import ScanStatus
 from radioslam.slam.submap_map import SubmapMap
@@ -60,7 +61,9 @@ class SlamSession:
         self.front_end, self.loop_closer = FrontEnd.from_config(cfg, odometry), LoopCloser.from_config(cfg)
         self.back_end = BackEnd.from_config(cfg)
         self.posterior = Posterior.from_config(cfg, self.front_end.motion)  # one scan's placement weighed
-        self.lost_and_found, self.forks = LostAndFound.from_config(cfg, self.posterior), Forks.from_config(cfg)
+        self.rivals = Rivals()  # every decision's alternative, for the ending
+        self.lost_and_found = LostAndFound.from_config(cfg, self.posterior, self.rivals)
+        self.forks = Forks.from_config(cfg)
         self.steps: list[Step] = []
         self.sightings: list[np.ndarray] = []  # each scan's sightings of walls, for the last solve
         self.seconds: list[float] = []
@@ -106,6 +109,7 @@ class SlamSession:
             suspect = False  # an open fork the map contradicts the choice of decides first (step 8)
         found = loop_closer.relocalize(k, points, back_end.estimates, k - self.lost) if suspect else None
         if found is not None and self._relocation_log_odds(k, found, step, points) > 0.0:
+            self.rivals.keep_poses(k, back_end.estimates[k - 1], step.pose, Cause.RELOCALIZATION)
             step = front_end.relocalized(back_end.relocalized_pose(found), found.score)
         relocalizations = [found] if step.status is ScanStatus.RELOCALIZED else []
         # 4. a score drop opens a trial elsewhere in the map; once confirmed by the scans after it, the
@@ -120,7 +124,9 @@ class SlamSession:
             relocalizations = confirmed
         # 5. the pose and the factors tying it to the previous one into the pose graph
         back_end.add(k, step, front_end.motion.odometry_step(k))
-        forks.remember(k, step, back_end.estimates, loop_closer)  # an ambiguous scan's turned rivals
+        if k > 0:  # an ambiguous scan's turned rivals: kept for the ending, and a fork for the scans after it
+            self.rivals.keep_poses(k, back_end.estimates[k - 1], forks.turned(step), Cause.TURNED)
+        forks.remember(k, step, back_end.estimates, loop_closer)
         # 6. the scan joins the local map and the current submap; the motion model learns the step
         front_end.update(k, step, points, back_end.estimates.get(k - 1))
         if step.status is not ScanStatus.SKIPPED:
@@ -151,6 +157,9 @@ class SlamSession:
         """A fork decided at scan k: its rival's poses taken; the loops of scan k that still hold."""
         if decided is None:
             return loops
+        estimates = self.back_end.estimates
+        for key, _ in decided.switches:  # the branch left
+            self.rivals.keep_poses(key, estimates[key - 1], estimates[key], Cause.FORK)
         self.back_end.switch(decided.switches)
         self.lost_and_found.forget()
         why = ("it matches the map from before far better" if decided.loop is not None else
@@ -197,18 +206,18 @@ class SlamSession:
         return self._ending(result) if cfg.ending.enabled else result
 
     def _ending(self, result: SlamResult) -> SlamResult:
-        """The result with the best of the pose graph's trajectory, the odometry's and the rival branches of the
-        forks still open, and the runner-up when its odds are within the stated ones (a warning naming the
-        cause)."""
+        """The result with the best of the pose graph's trajectory, the odometry's and every decision's
+        alternative, and the runner-up when its odds are within the stated ones (a warning naming the cause)."""
         tick = time.perf_counter()
         motion = self.front_end.motion
         candidates = [(Source.POSE_GRAPH, result.poses)]
         odometry = odometry_in_map_frame(motion.odometry, result.poses[0]) if motion.odometry is not None else None
         if odometry is not None:
             candidates.append((Source.ODOMETRY, odometry))
-        candidates += [(Source.RIVAL_BRANCH, branch) for branch in self.forks.branches(result.poses)]
-        candidates += [(Source.RIVAL_BRANCH, branch) for branch in self.lost_and_found.branches(result.poses)]
         judge = Judge.from_config(self.cfg, self.posterior)
+        branches = [(rival.key, poses) for rival, poses in self.rivals.branches(result.poses)]
+        candidates += [(Source.RIVAL_BRANCH, poses) for poses in
+                       judge.shortlist(branches, self.loop_closer.points, self.cfg.ending.hypotheses)]
         ending = judge.judge(candidates, self.loop_closer.points)
         best, runner_up = ending.best, ending.runner_up
         lines = []
