@@ -12,6 +12,7 @@ from radioslam.slam.back_end import BackEnd
 from radioslam.slam.forks import Forks
 from radioslam.slam.front_end import Step
 from radioslam.slam.loop_closer import LoopClosure
+from radioslam.slam.rivals import Rivals
 from radioslam.slam.se2 import between, compose, inverse, pose_covariance, transform_points, wrap_angle
 
 COV = pose_covariance(0.02, 0.3)
@@ -64,7 +65,7 @@ def fork_at_scan_3(closer: StubCloser, contradicted: bool = True, on_free: int =
     ``last`` or not) is then observed, the chosen branch ``contradicted`` by the map before the fork
     (``on_free`` of its 400 points on its free space, the rival's none) or not. Returns the decision and
     the estimates."""
-    forks = Forks.from_config(SlamConfig())
+    forks = Forks.from_config(SlamConfig(), Rivals())
     forks._on_free = lambda fork, k, estimates, loop_closer, jump=None: \
         (on_free if contradicted and chosen_branch(jump) else 0, 400)
     estimates = {k: p for k, p in enumerate(walk(6))}  # the chosen branch: straight on
@@ -120,7 +121,7 @@ def test_the_rival_branch_is_counted_and_taken_where_the_map_places_it_not_where
     slid = compose(compose(walk(3)[2], [0.0, 0.0, np.pi]), [2.0, 0.0, 0.0])  # scan 5 by the rival's jump
     place = compose(slid, [0.4, 0.0, 0.0])
     counted = []
-    forks = Forks.from_config(SlamConfig())
+    forks = Forks.from_config(SlamConfig(), Rivals())
 
     def on_free(fork, k, estimates, scans, jump=None):
         carried = None if jump is None else compose(jump, estimates[k])
@@ -159,7 +160,7 @@ def test_a_branch_is_placed_where_its_scans_together_fit_the_map_from_before_the
         scans[m] = ScanPoints(local, normals[::3] - pose[2], np.zeros((0, 2)))
     off = np.array([0.3, -0.2, np.radians(2.0)])
     estimates = {m: compose(off, pose) for m, pose in truth.items()}  # the branch as its estimates put it
-    placed = Forks.from_config(SlamConfig())._placed(fork, 3, estimates, scans, np.zeros(3))
+    placed = Forks.from_config(SlamConfig(), Rivals())._placed(fork, 3, estimates, scans, np.zeros(3))
     for m in truth:
         error = compose(placed, estimates[m]) - truth[m]
         assert np.all(np.abs(error[:2]) <= 0.05) and abs(wrap_angle(error[2])) <= np.radians(0.5)
@@ -172,7 +173,7 @@ def test_a_new_fork_evicts_the_oldest_fork_the_map_does_not_contradict_yet():
     decided); then the oldest uncontradicted one goes, and the latest when all are contradicted (forks
     opened on a wrong branch are contradicted by its error: narrow-corridor's fourth corner)."""
     def remembered(contradicted: set[int]) -> list[int]:
-        forks = Forks.from_config(SlamConfig())
+        forks = Forks.from_config(SlamConfig(), Rivals())
         forks._on_free = lambda fork, k, estimates, loop_closer, jump=None: \
             (40 if fork.key in contradicted else 0, 400)
         estimates = {k: p for k, p in enumerate(walk(12))}
@@ -197,7 +198,7 @@ def test_the_chosen_branch_is_judged_where_the_map_places_it_too():
     wrong branch; judged alike, nothing contradicts the choice, and no fork contests a suspicious scan."""
     truth_5 = compose(compose(walk(3)[2], [0.0, 0.0, np.pi]), [2.0, 0.0, 0.0])
     closer = StubCloser(truth_5, 0.9, 0.6)
-    forks = Forks.from_config(SlamConfig())
+    forks = Forks.from_config(SlamConfig(), Rivals())
     forks._on_free = lambda fork, k, estimates, scans, jump=None: (40 if chosen_branch(jump) else 0, 400)
     placing(forks, chosen_shift=np.array([0.0, 0.25, 0.0]))
     estimates = ambiguous_walk(forks, closer)
@@ -267,7 +268,7 @@ def test_a_branch_is_contradicted_by_walls_where_the_map_before_the_fork_saw_thr
                                       seen_through, 1.0)
     fork = Fork(1, np.zeros((1, 3)), grid, (0,), 4)
     across = np.column_stack([np.full(20, 2.0), np.linspace(-0.5, 0.5, 20)])  # a wall across the line
-    forks = Forks.from_config(SlamConfig())
+    forks = Forks.from_config(SlamConfig(), Rivals())
     scans = {1: SimpleNamespace(xy=across, normals=np.full(20, np.nan))}
     assert forks._contradicted(*forks._on_free(fork, 1, {1: np.zeros(3)}, scans))
     assert not forks._contradicted(*forks._on_free(fork, 1, {1: np.array([3.0, 0.0, 0.0])}, scans))  # on the wall
@@ -277,7 +278,7 @@ def test_the_chosen_branch_must_be_contradicted_significantly_more_than_the_riva
     """A sign test on the points each branch puts on the frozen map's free space: 15 against 0 is
     evidence (a wrong wall, hall-random-13), 6 against 2 (a ghost a scan, shelf-hall seed 2) and
     3 against 3 are not; the evidence grows with the counts, not with one point's place."""
-    forks = Forks.from_config(SlamConfig())
+    forks = Forks.from_config(SlamConfig(), Rivals())
     decided = forks._contradicted_more
 
     assert decided(15, 0) and decided(7, 0) and decided(12, 2)
@@ -352,7 +353,7 @@ def test_two_open_forks_are_also_tested_together_latest_switch_first():
     poses = walk(8)
     estimates = {k: p for k, p in enumerate(poses)}
     turn = np.array([[0.0, 0.0, np.pi]])  # each rival: turned on the spot instead of walking on
-    forks = Forks.from_config(SlamConfig())
+    forks = Forks.from_config(SlamConfig(), Rivals())
     forks.open = [Fork(2, turn, None, (0, 1), 4), Fork(5, turn, None, (0, 1, 2, 3, 4), 4)]  # no map: names only
     found = list(forks.hypotheses(7, estimates))
     assert [[key for key, _ in switches] for _, _, switches, _ in found] == [[2], [5], [5, 2]]
@@ -373,7 +374,7 @@ def test_a_rival_loop_closed_before_the_chosen_branch_is_contradicted_is_remembe
     scans after: the loop found at scan 4, when nothing contradicted the choice yet, decides at scan 5."""
     truth_4 = compose(compose(walk(3)[2], [0.0, 0.0, np.pi]), [1.0, 0.0, 0.0])  # the rival's scan 4
     closer = StubCloser(truth_4, 0.6)
-    forks = Forks.from_config(SlamConfig())
+    forks = Forks.from_config(SlamConfig(), Rivals())
     evidence = {4: 0, 5: 40}  # the chosen branch's points on the map's free space, by scan
     forks._on_free = lambda fork, k, estimates, loop_closer, jump=None: \
         (evidence[k] if chosen_branch(jump) else 0, 400)

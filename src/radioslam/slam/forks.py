@@ -66,6 +66,7 @@ from radioslam.slam.correlative import candidate_likelihoods, correlative_match
 from radioslam.slam.front_end import Step
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
+from radioslam.slam.rivals import Cause, Rivals
 from radioslam.slam.scan_points import ScanPoints, fused_points
 from radioslam.slam.se2 import between, compose, inverse, wrap_angle
 from radioslam.slam.status import ScanStatus
@@ -120,8 +121,9 @@ class Decision:
 class Forks:
     """Remembers forks and tests their rivals; ``observe`` once per scan, after its loops."""
 
-    def __init__(self, cfg: LoopClosureConfig, turn_rad: float, levels: int, angle_step: float):
+    def __init__(self, cfg: LoopClosureConfig, turn_rad: float, levels: int, angle_step: float, rivals: Rivals):
         self.cfg, self.turn_rad = cfg, turn_rad  # rivals turned at least this much from the choice fork
+        self.rivals = rivals  # where every turned rival is kept for the ending, whether a fork opens or not
         self.angle_step = angle_step  # of the match that places a branch
         self.levels = levels  # branch-and-bound levels of each fork's matcher
         self.open: list[Fork] = []
@@ -129,9 +131,9 @@ class Forks:
         self.rival_loops: dict[tuple, LoopClosure] = {}  # per rival branch: its best loop since the fork
 
     @classmethod
-    def from_config(cls, cfg) -> "Forks":
+    def from_config(cls, cfg, rivals: Rivals) -> "Forks":
         return cls(cfg.loop_closure, np.radians(cfg.front_end.distinct_deg), cfg.grid.branch_levels,
-                   np.radians(cfg.front_end.angle_step_deg))
+                   np.radians(cfg.front_end.angle_step_deg), rivals)
 
     def turned(self, step: Step) -> np.ndarray:
         """(R, 3) the rivals of ``step`` turned at least ``turn_rad`` from its pose: those a fork remembers."""
@@ -141,7 +143,10 @@ class Forks:
         """Scan k's turned rivals, if any (once pose k − 1 and k are in ``estimates``), with the map before
         scan k."""
         self.open = [f for f in self.open if k - f.key <= self.cfg.fork_memory]
-        if k - 1 not in estimates or not len(step.rivals) or not self.cfg.fork_limit:
+        if k - 1 not in estimates or not len(step.rivals):
+            return
+        self.rivals.keep_poses(k, estimates[k - 1], self.turned(step), Cause.TURNED)
+        if not self.cfg.fork_limit:
             return
         turned = self.turned(step)
         keys = loop_closer.map_keys(k, before=k)

@@ -63,7 +63,7 @@ class SlamSession:
         self.posterior = Posterior.from_config(cfg, self.front_end.motion)  # one scan's placement weighed
         self.rivals = Rivals()  # every decision's alternative, for the ending
         self.lost_and_found = LostAndFound.from_config(cfg, self.posterior, self.rivals)
-        self.forks = Forks.from_config(cfg)
+        self.forks = Forks.from_config(cfg, self.rivals)
         self.steps: list[Step] = []
         self.sightings: list[np.ndarray] = []  # each scan's sightings of walls, for the last solve
         self.seconds: list[float] = []
@@ -124,9 +124,7 @@ class SlamSession:
             relocalizations = confirmed
         # 5. the pose and the factors tying it to the previous one into the pose graph
         back_end.add(k, step, front_end.motion.odometry_step(k))
-        if k > 0:  # an ambiguous scan's turned rivals: kept for the ending, and a fork for the scans after it
-            self.rivals.keep_poses(k, back_end.estimates[k - 1], forks.turned(step), Cause.TURNED)
-        forks.remember(k, step, back_end.estimates, loop_closer)
+        forks.remember(k, step, back_end.estimates, loop_closer)  # an ambiguous scan's turned rivals
         # 6. the scan joins the local map and the current submap; the motion model learns the step
         front_end.update(k, step, points, back_end.estimates.get(k - 1))
         if step.status is not ScanStatus.SKIPPED:
