@@ -137,9 +137,10 @@ class Judge:
         placed = []
         for key, poses in branches:
             velocity = between(poses[key - 2], poses[key - 1]) if key >= 2 else None
-            earlier = [m for m in keys if m < key]
-            term = self.posterior.scan_term(scans[key], poses[key], earlier, poses, scans) if key in scans else 0.0
-            placed.append(term + self.posterior.step_term(key, poses[key - 1], poses[key], extent_m2(poses), velocity))
+            area, earlier = extent_m2(poses), [m for m in keys if m < key]
+            placed.append(self.posterior.placement(key, scans[key], poses[key], poses[key - 1], earlier, poses, scans,
+                                                   area, velocity) if key in scans else
+                          self.posterior.step_term(key, poses[key - 1], poses[key], area, velocity))
         best = np.argsort(-np.array(placed), kind="stable")[:count]
         return [branches[i][1] for i in sorted(best)]
 

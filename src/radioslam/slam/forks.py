@@ -145,10 +145,10 @@ class Forks:
         self.open = [f for f in self.open if k - f.key <= self.cfg.fork_memory]
         if k - 1 not in estimates or not len(step.rivals):
             return
-        self.rivals.keep_poses(k, estimates[k - 1], self.turned(step), Cause.TURNED)
+        turned = self.turned(step)
+        self.rivals.keep_poses(k, estimates[k - 1], turned, Cause.TURNED)
         if not self.cfg.fork_limit:
             return
-        turned = self.turned(step)
         keys = loop_closer.map_keys(k, before=k)
         if not len(turned) or not keys:
             return
