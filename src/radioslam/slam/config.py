@@ -1,6 +1,7 @@
 """SLAM settings (paper §IV-B), one section per component (issue #12). Lengths in metres, angles
 in degrees at this interface only. Loadable from the ``slam:`` section of a YAML config file
-(:func:`load_slam_config`); every tuning constant of the SLAM lives here, none in the code.
+(:func:`load_slam_config`); every tuning constant of the SLAM lives here, none in the code. ``docs/settings.md``
+lists them in one table (default, unit, what each rests on); change both together.
 """
 
 from __future__ import annotations
@@ -53,7 +54,6 @@ class ScanConfig(_Section):
     # an arc peaking on its sector's edge joins the adjacent orientation's arc at its range whose peak
     # lies within this bearing (a wall between two sectors)
     seam_gap_deg: float = Field(8.0, gt=0)
-    project_arcs: bool = False  # arc points placed where their beam meets the arc's wall line (tried: worse)
     # degeneracy (Zhang et al. 2016): line fits through neighbours within this radius where no
     # specular normal is known; a point within this many σ of the map agrees with it
     neighbour_radius_m: float = Field(0.5, gt=0)

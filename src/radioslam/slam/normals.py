@@ -158,12 +158,3 @@ def oblique_walls(bearing: np.ndarray, foot_range: np.ndarray, tolerance: float,
     nearest = np.argmin(np.where(oblique, foot_range[None, :], np.inf), axis=1)  # the nearest such wall
     return np.where(oblique.any(axis=1), nearest, -1)
 
-
-def wall_points(scan: Scan, normals: np.ndarray) -> np.ndarray:
-    """Terminal-frame points (P, 2) with each arc point moved to where its beam meets the
-    arc's wall: the line through the specular foot (range r, bearing φ) normal to φ, at
-    range r / cos(θ − φ) along the beam θ. Points without a normal stay where they are."""
-    known = ~np.isnan(normals)
-    stretch = np.ones(len(scan))
-    stretch[known] = 1.0 / np.cos(scan.angle_rad[known] - normals[known])
-    return scan.xy * stretch[:, None]

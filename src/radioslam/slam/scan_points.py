@@ -13,7 +13,7 @@ from radioslam.sensing.pointcloud import Scan
 from radioslam.slam.config import GridConfig, ScanConfig
 from radioslam.slam.free_space import free_samples, seen_samples
 from radioslam.slam.grid import LikelihoodGrid, field_reach
-from radioslam.slam.normals import echo_weights, specular_arcs, wall_points
+from radioslam.slam.normals import echo_weights, specular_arcs
 from radioslam.slam.se2 import between, transform_points
 
 SEEN_SPACING_M = 0.2  # the observed space's samples: a beam is ~13° wide, 0.2 m across at 1 m
@@ -52,7 +52,7 @@ def prepare_points(scan: Scan, cfg: ScanConfig, grid: GridConfig) -> ScanPoints:
     """The scan's points with their specular normals, its free-space samples (half a cell apart) and
     the sightings of the walls its specular arcs face."""
     phi, sightings = specular_arcs(scan, cfg.arc_range_m, np.radians(cfg.seam_gap_deg))
-    xy = wall_points(scan, phi) if cfg.project_arcs else scan.xy
+    xy = scan.xy
     return ScanPoints(xy, phi, free_samples(xy, phi, grid.free_stop_m, grid.free_pose_radius_m,
                                             grid.resolution_m / 2), sightings, echo_weights(scan, cfg.arc_range_m))
 
