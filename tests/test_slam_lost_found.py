@@ -9,7 +9,7 @@ from radioslam.slam.config import SlamConfig
 from radioslam.slam.loop_closer import LoopCloser
 from radioslam.slam.lost_found import LostAndFound, Trial
 from radioslam.slam.posterior import Posterior
-from radioslam.slam.rivals import Cause, Rivals
+from radioslam.slam.rivals import Rivals
 from radioslam.slam.status import ScanStatus
 
 
@@ -142,26 +142,3 @@ def test_after_a_jump_each_scan_is_also_searched_for_where_the_terminal_was_take
     lost_and_found.alert, searched = 0, len(stub.followed)
     lost_and_found.observe(10, ScanStatus.MATCHED, ESTIMATES[10], 0.6, None, _before(10), stub)
     assert lost_and_found.trial is None and len(stub.followed) == searched
-
-
-class LookAlikeStub(MapStub):
-    """The whole-map search places the scan 5 m off, where the map looks the same (a symmetric room)."""
-
-    def looks_alike(self, *args):
-        return True
-
-
-def test_a_place_that_looks_the_same_is_kept_for_the_ending_not_dropped(monkeypatch):
-    """A score drop whose scan the whole map places elsewhere, where the room looks the same from both places:
-    no trial can tell the two apart scan by scan, so none opens; the place found is kept as the walk's
-    alternative at that scan (the ending weighs it against the answer), not dropped in silence."""
-    cfg = SlamConfig()
-    rivals = Rivals()
-    lost_and_found, stub = LostAndFound.from_config(cfg, Posterior.from_config(cfg, None), rivals), LookAlikeStub()
-    _walk(lost_and_found, stub, [0.6] * 8, 1.0, monkeypatch)
-    assert rivals.kept == []  # no drop, nothing searched
-    lost_and_found.observe(8, ScanStatus.MATCHED, ESTIMATES[8], 0.3, None, _before(8), stub)
-    assert lost_and_found.trial is None
-    (rival,) = rivals.kept
-    assert rival.key == 8 and rival.cause is Cause.LOOK_ALIKE
-    assert np.allclose(rival.step, [5.0, 0.0, 0.0])  # into the place found, 5 m on from pose 7

@@ -9,8 +9,7 @@ scan by scan and weighed by its posterior odds (:mod:`radioslam.slam.posterior`)
    share spread over the area searched (with odometry, one the odometry does not show costs tens of
    nats), and the scans must pay for it. Unless the room looks the same from both places (the map
    around the front end's pose, carried to the place found, lands on walls again: a symmetric room, a
-   row of aisles): then no trial can tell the places apart scan by scan, and the place found is kept as the
-   walk's alternative at that scan for the ending to weigh (:mod:`radioslam.slam.rivals`);
+   row of aisles);
 2. each following scan is searched for within one step of the latest place (every heading, as the front
    end searches its own local map), against the same map with the trial's scans added at their places (a
    front end led astray by them, a wrong turn, does not lead the trial astray);
@@ -188,8 +187,6 @@ class LostAndFound:
             return
         place = loop_closer.placed_pose(found, estimates)
         if loop_closer.looks_alike(compose(place, inverse(pose)), pose, keys, grid, estimates):
-            # no trial can tell the two places apart scan by scan: the ending weighs the place as the walk's alternative
-            self.rivals.keep_poses(k, estimates[k - 1], place, Cause.LOOK_ALIKE)
             return
         self._start(k, keys, pose, found, place, points, estimates, loop_closer, found.searched_m2,
                     self._front_placements(pose, points, grid, normals, loop_closer))

@@ -88,60 +88,90 @@ class SlamSession:
 
     def add(self, scan: Scan) -> ScanUpdate:
         """Scan k (the next one): its pose now."""
-        cfg, k, tick = self.cfg, len(self.steps), time.perf_counter()
-        front_end, loop_closer, back_end, forks = self.front_end, self.loop_closer, self.back_end, self.forks
+        k, tick, back_end, forks = len(self.steps), time.perf_counter(), self.back_end, self.forks
         # 1. the scan's points (its horizontal slice, thinned where there are too many, or too far) and the
         #    specular normal of the wall each came from
-        scan, thinned = thin_scan(scan.horizontal(), cfg.scan.max_points, cfg.scan.max_range_m, cfg.grid.resolution_m)
-        self.enough_points |= len(scan) >= cfg.scan.min_points
-        points = prepare_points(scan, cfg.scan, cfg.grid)
-        self.sightings.append(points.sightings)
+        scan, points, thinned = self._points(scan)
         # 2. register it against the local map: the motion's hypotheses and the scan's own rotation candidates
-        step = front_end.register(k, points, back_end.estimates).noted(thinned)
+        step = self.front_end.register(k, points, back_end.estimates).noted(thinned)
         # 3. a lost scan (one of a stretch nothing matched, or one whose match puts points on space the map
         #    saw through) is searched for in the whole map: relocalized where its posterior there (what the map
         #    explains better, less the prior of a jump that far) beats the front end's pose's
-        self.lost = self.lost + 1 if step.status is ScanStatus.PREDICTED else 0
-        suspect = self.lost >= cfg.loop_closure.relocalize_after or (
-            step.status is not ScanStatus.SKIPPED and step.contradicted >= cfg.loop_closure.contradicted_fraction)
-        if suspect and step.status is not ScanStatus.PREDICTED and forks.contested(k, back_end.estimates,
-                                                                                  loop_closer, step, points):
-            suspect = False  # an open fork the map contradicts the choice of decides first (step 8)
-        found = loop_closer.relocalize(k, points, back_end.estimates, k - self.lost) if suspect else None
-        if found is not None and self._relocation_log_odds(k, found, step, points) > 0.0:
-            self.rivals.keep_poses(k, back_end.estimates[k - 1], step.pose, Cause.RELOCALIZATION)
-            step = front_end.relocalized(back_end.relocalized_pose(found), found.score)
-        relocalizations = [found] if step.status is ScanStatus.RELOCALIZED else []
+        step, relocalizations = self._relocalized(k, step, points)
         # 4. a score drop opens a trial elsewhere in the map; once confirmed by the scans after it, the
         #    terminal was carried there (kidnapped): every scan of the trial is relocalized
-        confirmed = self.lost_and_found.observe(k, step.status, step.pose, step.score, points, back_end.estimates,
-                                                loop_closer)
-        if confirmed:
-            back_end.cut(confirmed[0].key)
-            for loop in confirmed[:-1]:
-                self.steps[loop.key] = front_end.relocalized(back_end.relocalized_pose(loop), loop.score, confirmed)
-            step = front_end.relocalized(back_end.relocalized_pose(confirmed[-1]), confirmed[-1].score, confirmed)
-            relocalizations = confirmed
+        step, relocalizations = self._taken_elsewhere(k, step, points, relocalizations)
         # 5. the pose and the factors tying it to the previous one into the pose graph
-        back_end.add(k, step, front_end.motion.odometry_step(k))
-        forks.remember(k, step, back_end.estimates, loop_closer)  # an ambiguous scan's turned rivals
+        back_end.add(k, step, self.front_end.motion.odometry_step(k))
+        forks.remember(k, step, back_end.estimates, self.loop_closer)  # an ambiguous scan's turned rivals
         # 6. the scan joins the local map and the current submap; the motion model learns the step
-        front_end.update(k, step, points, back_end.estimates.get(k - 1))
-        if step.status is not ScanStatus.SKIPPED:
-            loop_closer.add(k, points)
-            self.map.add(k, scan.xy, loop_closer.submaps[-1].anchor, back_end.estimates)
+        self._insert(k, step, points, scan)
         # 7. loop closures against older submaps near the pose (sampled while the walk is tied to the map)
-        budget = 0 if step.status in (ScanStatus.SKIPPED, ScanStatus.DEGENERATE, ScanStatus.PREDICTED) else \
-            loop_closer.budget(k, back_end.loops[-1].key if back_end.loops else None)
-        loops = [self.loop_hook(lc) for lc in loop_closer.close(k, back_end.estimates, back_end.drift, budget)]
+        loops = self._loops(k, step)
         # 8. an ambiguous scan's rival branch that matches the map from before it far better than the chosen
         #    branch, which contradicts that map, is taken: every pose since carried by its jump
         self.steps.append(step)
-        loops = self._decide(k, forks.observe(k, step.status, back_end.estimates, loop_closer), loops)
+        loops = self._decide(k, forks.observe(k, step.status, back_end.estimates, self.loop_closer), loops)
         # 9. the loops into the pose graph, and its new solution
         back_end.add_loops(loops + relocalizations)
         self.seconds.append(time.perf_counter() - tick)
         return ScanUpdate(k, np.array(back_end.estimates[k]), self.steps[k].status, self.seconds[-1])
+
+    def _points(self, scan: Scan):
+        """Step 1: the scan's horizontal slice as thinned, its matchable points (:class:`ScanPoints`) and the note
+        on its thinning."""
+        cfg = self.cfg
+        scan, thinned = thin_scan(scan.horizontal(), cfg.scan.max_points, cfg.scan.max_range_m, cfg.grid.resolution_m)
+        self.enough_points |= len(scan) >= cfg.scan.min_points
+        points = prepare_points(scan, cfg.scan, cfg.grid)
+        self.sightings.append(points.sightings)
+        return scan, points, thinned
+
+    def _relocalized(self, k: int, step: Step, points) -> tuple[Step, list[LoopClosure]]:
+        """Step 3: the step, relocalized where a lost scan's posterior in the whole map beats the front end's pose
+        (the pose it replaced kept as its alternative); and the relocalization, if any."""
+        cfg, back_end, loop_closer = self.cfg, self.back_end, self.loop_closer
+        self.lost = self.lost + 1 if step.status is ScanStatus.PREDICTED else 0
+        suspect = self.lost >= cfg.loop_closure.relocalize_after or (
+            step.status is not ScanStatus.SKIPPED and step.contradicted >= cfg.loop_closure.contradicted_fraction)
+        if suspect and step.status is not ScanStatus.PREDICTED and self.forks.contested(k, back_end.estimates,
+                                                                                       loop_closer, step, points):
+            suspect = False  # an open fork the map contradicts the choice of decides first (step 8)
+        found = loop_closer.relocalize(k, points, back_end.estimates, k - self.lost) if suspect else None
+        if found is None or self._relocation_log_odds(k, found, step, points) <= 0.0:
+            return step, []
+        self.rivals.keep_poses(k, back_end.estimates[k - 1], step.pose, Cause.RELOCALIZATION)
+        return self.front_end.relocalized(back_end.relocalized_pose(found), found.score), [found]
+
+    def _taken_elsewhere(self, k: int, step: Step, points,
+                         relocalizations: list[LoopClosure]) -> tuple[Step, list[LoopClosure]]:
+        """Step 4: the step and the relocalizations, those of a trial confirmed at scan k in place of step 3's:
+        the jump into its first scan loosened, every earlier scan of it relocalized."""
+        back_end, front_end = self.back_end, self.front_end
+        confirmed = self.lost_and_found.observe(k, step.status, step.pose, step.score, points, back_end.estimates,
+                                                self.loop_closer)
+        if not confirmed:
+            return step, relocalizations
+        back_end.cut(confirmed[0].key)
+        for loop in confirmed[:-1]:
+            self.steps[loop.key] = front_end.relocalized(back_end.relocalized_pose(loop), loop.score, confirmed)
+        return front_end.relocalized(back_end.relocalized_pose(confirmed[-1]), confirmed[-1].score,
+                                     confirmed), confirmed
+
+    def _insert(self, k: int, step: Step, points, scan: Scan) -> None:
+        """Step 6: the scan (thinned) into the local map, its submap and the live map; the step into the motion
+        model."""
+        self.front_end.update(k, step, points, self.back_end.estimates.get(k - 1))
+        if step.status is not ScanStatus.SKIPPED:
+            self.loop_closer.add(k, points)
+            self.map.add(k, scan.xy, self.loop_closer.submaps[-1].anchor, self.back_end.estimates)
+
+    def _loops(self, k: int, step: Step) -> list[LoopClosure]:
+        """Step 7: scan k's loop closures (none from a scan that fixed no pose), each through the loop hook."""
+        back_end, loop_closer = self.back_end, self.loop_closer
+        budget = 0 if step.status in (ScanStatus.SKIPPED, ScanStatus.DEGENERATE, ScanStatus.PREDICTED) else \
+            loop_closer.budget(k, back_end.loops[-1].key if back_end.loops else None)
+        return [self.loop_hook(lc) for lc in loop_closer.close(k, back_end.estimates, back_end.drift, budget)]
 
     def _relocation_log_odds(self, k: int, found: LoopClosure, step: Step, points) -> float:
         """Scan k's log posterior odds at the place relocalization ``found`` against the front end's pose, under
