@@ -220,7 +220,7 @@ class Scored:
 def carried_rigidly(a: np.ndarray, b: np.ndarray, start: int, tolerance: float = 1e-9) -> bool:
     """Whether poses ``b[start:]`` are ``a[start:]`` carried by one rigid transform."""
     jump = compose(b[start], inverse(a[start]))
-    carried = np.array([compose(jump, pose) for pose in a[start:]])
+    carried = compose(jump, a[start:])
     d = carried - b[start:]
     d[:, 2] = wrap_angle(d[:, 2])
     return bool(np.abs(d).max() <= tolerance)
@@ -231,4 +231,4 @@ def odometry_in_map_frame(odometry: np.ndarray, first_pose: np.ndarray) -> np.nd
     if odometry is None or np.isnan(odometry[:, :2]).any():
         return None
     carry = compose(first_pose, inverse(odometry[0]))
-    return np.array([compose(carry, pose) for pose in odometry])
+    return compose(carry, odometry)

@@ -51,7 +51,7 @@ class Rivals:
 
     def keep_poses(self, key: int, last: np.ndarray, poses: np.ndarray, cause: Cause) -> None:
         """Scan ``key``'s alternative poses (A, 3) (world frame, with pose key − 1 at ``last``)."""
-        self.keep(key, np.array([between(last, pose) for pose in np.atleast_2d(poses)]).reshape(-1, 3), cause)
+        self.keep(key, between(last, np.atleast_2d(poses)).reshape(-1, 3), cause)
 
     def branches(self, poses: np.ndarray) -> list[tuple[Rival, np.ndarray]]:
         """Each alternative's trajectory (P, 3): ``poses`` with its step into its scan, every later pose carried
@@ -60,6 +60,6 @@ class Rivals:
         for rival in self.kept:
             jump = compose(compose(poses[rival.key - 1], rival.step), inverse(poses[rival.key]))
             branch = poses.copy()
-            branch[rival.key:] = [compose(jump, pose) for pose in poses[rival.key:]]
+            branch[rival.key:] = compose(jump, poses[rival.key:])
             out.append((rival, branch))
         return out

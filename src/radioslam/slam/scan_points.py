@@ -52,8 +52,7 @@ def prepare_points(scan: Scan, cfg: ScanConfig, grid: GridConfig) -> ScanPoints:
     """The scan's points with their specular normals, its free-space samples (half a cell apart) and
     the sightings of the walls its specular arcs face."""
     phi, sightings = specular_arcs(scan, cfg.arc_range_m, np.radians(cfg.seam_gap_deg))
-    xy = scan.xy
-    return ScanPoints(xy, phi, free_samples(xy, phi, grid.free_stop_m, grid.free_pose_radius_m,
+    return ScanPoints(scan.xy, phi, free_samples(scan.xy, phi, grid.free_stop_m, grid.free_pose_radius_m,
                                             grid.resolution_m / 2), sightings, echo_weights(scan, cfg.arc_range_m))
 
 
