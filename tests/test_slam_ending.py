@@ -23,16 +23,22 @@ def _wall_points(segments: np.ndarray, spacing: float = 0.2) -> np.ndarray:
     return np.concatenate(out)
 
 
-def _scans(segments: np.ndarray, poses: np.ndarray) -> dict[int, ScanPoints]:
-    """Each wall's points within 6 m, the wall one observation (its points weigh 1/n, as an arc's do)."""
+def _scans(segments: np.ndarray, poses: np.ndarray, specular: bool = False) -> dict[int, ScanPoints]:
+    """Each wall's points within 6 m, the wall one observation (its points weigh 1/n, as an arc's do);
+    ``specular``: each point carries its wall's specular normal (the bearing of the wall's foot, as a specular
+    arc's points do), else none."""
     walls = [_wall_points(segment[None]) for segment in segments]
     scans = {}
     for k, pose in enumerate(poses):
         local = [transform_points(inverse(pose), w) for w in walls]
-        local = [w[np.linalg.norm(w, axis=1) <= 6.0] for w in local]
+        normals = []
+        for (a, b), w in zip(transform_points(inverse(pose), segments.reshape(-1, 2)).reshape(-1, 2, 2), local):
+            foot = a + np.dot(-a, b - a) / np.dot(b - a, b - a) * (b - a)  # the terminal's foot on the wall's line
+            normals.append(np.full(len(w), np.arctan2(foot[1], foot[0]) if specular else np.nan))
+        near = [np.linalg.norm(w, axis=1) <= 6.0 for w in local]
+        local, normals = [w[m] for w, m in zip(local, near)], [n[m] for n, m in zip(normals, near)]
         weights = np.concatenate([np.full(len(w), 1.0 / max(len(w), 1)) for w in local])
-        xy = np.concatenate(local)
-        scans[k] = ScanPoints(xy, np.full(len(xy), np.nan), np.zeros((0, 2)), weights=weights)
+        scans[k] = ScanPoints(np.concatenate(local), np.concatenate(normals), np.zeros((0, 2)), weights=weights)
     return scans
 
 

@@ -407,13 +407,9 @@ def test_a_weak_match_turned_from_the_prediction_keeps_it_as_a_rival_for_the_map
     rather than on one noise draw."""
     from radioslam.eval.trajectory_metrics import ate_rmse
     from radioslam.scene.procedural import MotionKind, RoomKind, generate_case
-    from radioslam.sensing.pointcloud import Scan
 
     case = generate_case(RoomKind.POLYGON, MotionKind.FIXED, 2038, max_poses=27)
-    recorded = np.load(Path(__file__).parent / "data" / "polygon-fixed-2038-scans.npz")
-    ends = np.cumsum(recorded["counts"])
-    fields = ("range_m", "angle_rad", "power_db", "beam", "orientation")
-    scans = [Scan(*(recorded[f][end - count:end] for f in fields)) for end, count in zip(ends, recorded["counts"])]
+    scans = recorded_scans("polygon-fixed-2038-scans.npz")
     result = RadioSlam().run(scans)
     # The turned weak match is never fused. Which of the two ways it is refused depends on the CPU: the
     # map's float32 sums are reduced in an order set by the vector width (AVX-512 or AVX2), and scan
@@ -430,15 +426,21 @@ def test_a_weak_match_turned_from_the_prediction_keeps_it_as_a_rival_for_the_map
     assert ate_rmse(result.poses, case.scene.poses) <= 0.35
 
 
-def recorded_walk(name: str):
-    """The scans recorded in tests/data/``name`` and narrow-corridor's true poses of as many scans."""
-    from radioslam.scene import load_scene
+def recorded_scans(name: str) -> list:
+    """The scans recorded in tests/data/``name`` (their fields concatenated, with each scan's count)."""
     from radioslam.sensing.pointcloud import Scan
 
     recorded = np.load(Path(__file__).parent / "data" / name)
     ends = np.cumsum(recorded["counts"])
     fields = ("range_m", "angle_rad", "power_db", "beam", "orientation")
-    scans = [Scan(*(recorded[f][end - count:end] for f in fields)) for end, count in zip(ends, recorded["counts"])]
+    return [Scan(*(recorded[f][end - count:end] for f in fields)) for end, count in zip(ends, recorded["counts"])]
+
+
+def recorded_walk(name: str):
+    """The scans recorded in tests/data/``name`` and narrow-corridor's true poses of as many scans."""
+    from radioslam.scene import load_scene
+
+    scans = recorded_scans(name)
     return scans, load_scene("narrow-corridor").poses[:len(scans)]
 
 

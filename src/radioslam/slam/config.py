@@ -251,9 +251,12 @@ class EndingConfig(_Section):
     # a runner-up whose posterior odds against the answer are better than 1 : odds makes the trajectory
     # ambiguous (a probability ratio: the runner-up keeps at least 5 %)
     odds: float = Field(20.0, gt=1)
-    # the decisions' alternatives weighed as whole trajectories (the issue's K ≤ 8 hypotheses): those whose
-    # own scan's posterior is highest; each costs a likelihood grid per scan that comes back near its fork
+    # the decisions' alternatives weighed as whole trajectories (the issue's K ≤ 8 hypotheses): those of highest
+    # screened odds over the answer; each costs a likelihood grid per scan that comes back near its fork
     hypotheses: int = Field(8, ge=0, le=1000)
+    # the screening's sample: each alternative's odds estimated from at most this many of the scans whose map it
+    # changes, evenly spread (a likelihood grid each), where its whole scoring costs every one of them
+    screened_scans: int = Field(12, ge=1, le=1000)
 
 
 class Anchors(str, Enum):

@@ -3,9 +3,11 @@ by their log posteriors, the best is the answer, and a runner-up within stated o
 
 The hypotheses: the pose graph's solution (with the plane adjustment), the external odometry when given
 (placed at the first pose), and every decision's alternative (:mod:`radioslam.slam.rivals`: an ambiguous
-scan's turned rival, the branch a fork's decision left, the pose a relocalization replaced, the walk without a
-confirmed jump; each the answer with that one step replaced, every later pose carried with it; the
-``ending.hypotheses`` of highest posterior at their own scan, :meth:`Judge.shortlist`). The front end's own
+scan's turned rival, the motion's expected step where the scan overrode it, the branch a fork's decision
+left, the pose a relocalization replaced, the walk without a confirmed jump; each the answer with that one step
+replaced, every later pose carried with it, the step aligned by the scans after it, :meth:`Judge.aligned`; the
+``ending.hypotheses`` of highest odds over the answer screened on a sample of the scans each changes,
+:meth:`Judge.shortlist`). The front end's own
 chain is no hypothesis here: it is greedy in exactly this likelihood (each scan placed on its predecessors), and beat
 the loop-corrected trajectory on it where the latter was ten times closer to the truth (docs/notes.md,
 session 28). Two that agree (every pose within ``same_m`` and ``same_deg``) are one. Each trajectory T scores
@@ -32,10 +34,11 @@ from enum import Enum
 
 import numpy as np
 
-from radioslam.slam.posterior import Posterior, extent_m2
+from radioslam.slam.posterior import Posterior
+from radioslam.slam.refine import refine_poses
 from radioslam.slam.result import scan_ranges
-from radioslam.slam.scan_points import ScanPoints
-from radioslam.slam.se2 import between, compose, inverse, wrap_angle
+from radioslam.slam.scan_points import ScanPoints, fused_points, map_grid
+from radioslam.slam.se2 import compose, inverse, wrap_angle
 from radioslam.slam.status import ScanStatus
 
 
@@ -104,45 +107,81 @@ class Judge:
     """Built from the posterior that weighs each scan's placement and plain values: when two trajectories are
     one, and the stated odds."""
 
-    def __init__(self, posterior: Posterior, same_m: float, same_rad: float, odds: float):
+    def __init__(self, posterior: Posterior, same_m: float, same_rad: float, odds: float, align_m: float,
+                 align_rad: float, screened_scans: int):
         self.posterior, self.same_m, self.same_rad, self.odds = posterior, same_m, same_rad, odds
+        self.align_m, self.align_rad, self.screened_scans = align_m, align_rad, screened_scans
 
     @classmethod
     def from_config(cls, cfg, posterior: Posterior) -> "Judge":
-        e = cfg.ending
-        return cls(posterior, e.same_m, np.radians(e.same_deg), e.odds)
+        """An alternative's step is aligned within the front end's distinct radius: the resolution at which its
+        fit was told from the pose taken."""
+        e, f = cfg.ending, cfg.front_end
+        return cls(posterior, e.same_m, np.radians(e.same_deg), e.odds, f.distinct_m, np.radians(f.distinct_deg),
+                   e.screened_scans)
 
-    def judge(self, candidates: list[tuple[Source, np.ndarray]], scans: dict[int, ScanPoints]) -> Ending:
-        """The candidates (source, (P, 3) poses), those alike merged (the first kept), scored and ranked."""
+    def judge(self, candidates: list[tuple[Source, np.ndarray]], scans: dict[int, ScanPoints],
+              known: list["Scored"] = ()) -> Ending:
+        """The candidates (source, (P, 3) poses), those alike merged (the first kept), scored (or taken from
+        ``known``, the same poses scored already) and ranked."""
         kept: list[tuple[Source, np.ndarray]] = []
         for source, poses in candidates:
             if not any(self._alike(poses, other) for _, other in kept):
                 kept.append((source, poses))
         scored: list[Scored] = []
         for _, poses in kept:
-            scored.append(self.scan_terms(poses, scans, scored))
+            scored.append(next((s for s in known if s.poses is poses), None) or self.scan_terms(poses, scans, scored))
         hypotheses = [Hypothesis(source, poses, sum(s.terms, 0.0), self.posterior.trajectory_prior(poses))
                       for (source, poses), s in zip(kept, scored)]
         return Ending(sorted(hypotheses, key=lambda h: -h.log_posterior), self.odds)
 
-    def shortlist(self, branches: list[tuple[int, np.ndarray]], scans: dict[int, ScanPoints],
+    def shortlist(self, branches: list[tuple[int, np.ndarray]], answer: "Scored", scans: dict[int, ScanPoints],
                   count: int) -> list[np.ndarray]:
-        """The ``count`` branches (fork scan, (P, 3) poses) of highest posterior at their fork scan: its term
-        against the scans before it (the answer's, where the branch begins as the answer) and the step into it
-        given the step before (:meth:`Posterior.placement`); each kept alternative then costs a scoring of
-        the whole walk, where this costs one scan."""
+        """The ``count`` branches (fork scan, (P, 3) poses) of highest screened odds over the ``answer``
+        (:meth:`screened`); each kept alternative then costs a scoring of every scan whose map it changes."""
         if len(branches) <= count:
             return [poses for _, poses in branches]
-        keys = sorted(scans)
-        placed = []
-        for key, poses in branches:
-            velocity = between(poses[key - 2], poses[key - 1]) if key >= 2 else None
-            area, earlier = extent_m2(poses), [m for m in keys if m < key]
-            placed.append(self.posterior.placement(key, scans[key], poses[key], poses[key - 1], earlier, poses, scans,
-                                                   area, velocity) if key in scans else
-                          self.posterior.step_term(key, poses[key - 1], poses[key], area, velocity))
-        best = np.argsort(-np.array(placed), kind="stable")[:count]
+        odds = [self.screened(poses, answer, scans) for _, poses in branches]
+        best = np.argsort(-np.array(odds), kind="stable")[:count]
         return [branches[i][1] for i in sorted(best)]
+
+    def screened(self, poses: np.ndarray, answer: "Scored", scans: dict[int, ScanPoints]) -> float:
+        """An estimate of a trajectory's log odds over the scored ``answer``: the whole motion term's difference,
+        and the scan terms' (:meth:`scan_terms`) on at most ``screened_scans`` of the scans it judges against
+        another map than the answer does, evenly spread over them and scaled to their number (on the others the
+        two score alike). The odds of a branch lie where the walk comes back to the places it saw before its
+        fork, which the fork scan alone does not show."""
+        keys = sorted(scans)
+        changed = [(i, k, around) for i, k, around, alike in self._judged(poses, keys, answer) if not alike]
+        sample = [changed[j] for j in np.unique(np.linspace(0, len(changed) - 1, min(self.screened_scans,
+                                                                                        len(changed))).astype(int))] \
+            if changed else []
+        gain = sum(self.posterior.scan_term(scans[k], poses[k], keys[:i], poses, scans, around) - answer.terms[i - 1]
+                   for i, k, around in sample)
+        motion = self.posterior.trajectory_prior(poses) - self.posterior.trajectory_prior(answer.poses)
+        return (len(changed) / len(sample) * gain if sample else 0.0) + motion
+
+    def aligned(self, key: int, poses: np.ndarray, scans: dict[int, ScanPoints]) -> np.ndarray:
+        """A branch from scan ``key`` on with its jump refined: the scans from ``key`` on, one rigid body at the
+        branch's poses, fitted onto the map of the scans before ``key`` near them, within ``align_m`` and
+        ``align_rad`` (least squares on the likelihood field, :func:`radioslam.slam.refine.refine_poses`). A
+        decision's alternative step was fitted on the local map of its moment, a few degrees off at worst;
+        carried to the walk's end, such an error lays every later scan beside the walls it comes back to, and
+        the branch loses for its fit, not for its decision."""
+        keys = sorted(scans)
+        before, after = [m for m in keys if m < key], [m for m in keys if m >= key]
+        if not before or not after:
+            return poses
+        gap = np.linalg.norm(poses[before][:, None, :2] - poses[after][None, :, :2], axis=2).min(axis=1)
+        near = [m for m, d in zip(before, gap) if d <= self.posterior.radius_m]
+        if not near:
+            return poses
+        grid, _ = map_grid(near, {m: poses[m] for m in near}, scans, self.posterior.grid)
+        xy, normals = fused_points(after, {m: poses[m] for m in after}, scans, poses[key])
+        fitted = refine_poses(grid, xy, normals, poses[key][None], self.align_m, self.align_rad)[0]
+        out = poses.copy()
+        out[key:] = compose(compose(fitted, inverse(poses[key])), poses[key:])
+        return out
 
     def apart(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """(P,) the poses where two trajectories differ by more than ``same_m`` or ``same_rad``."""
@@ -170,19 +209,26 @@ class Judge:
             differ = np.flatnonzero(np.any(candidate.poses != poses, axis=1))
             if (same := int(differ[0]) if len(differ) else len(poses)) > shared:
                 other, shared = candidate, same
-        rigid = other is not None and shared < len(poses) and carried_rigidly(other.poses, poses, shared)
         terms, near = [], []
-        for i, k in enumerate(keys[1:], start=1):
-            if k < shared:
-                terms.append(other.terms[i - 1])
-                near.append(other.near[i - 1])
-                continue
-            around = self.posterior.nearby(poses[k], keys[:i], poses)
-            alike = rigid and around == other.near[i - 1] and all(m >= shared for m in around)
+        for i, k, around, alike in self._judged(poses, keys, other):
             terms.append(other.terms[i - 1] if alike else
                          self.posterior.scan_term(scans[k], poses[k], keys[:i], poses, scans, around))
             near.append(around)
         return Scored(poses, terms, near)
+
+    def _judged(self, poses: np.ndarray, keys: list[int], other: "Scored | None"):
+        """Per scan but the first: (its index i in ``keys``, its key, the scans before it near it, whether it
+        scores as on ``other``, a scored trajectory: before the first pose where the two differ, or judged
+        against the same scans where ``poses`` go on as ``other`` carried rigidly)."""
+        differ = np.flatnonzero(np.any(other.poses != poses, axis=1)) if other is not None else np.zeros(1, int)
+        shared = int(differ[0]) if len(differ) else len(poses)
+        rigid = other is not None and shared < len(poses) and carried_rigidly(other.poses, poses, shared)
+        for i, k in enumerate(keys[1:], start=1):
+            if k < shared:
+                yield i, k, other.near[i - 1], True
+                continue
+            around = self.posterior.nearby(poses[k], keys[:i], poses)
+            yield i, k, around, rigid and around == other.near[i - 1] and all(m >= shared for m in around)
 
     def warning(self, best: Hypothesis, runner_up: Hypothesis, odds: float, status: list, odometry: bool) -> str:
         """One line: the two trajectories, their odds, where they part (the scans beyond ``same_m`` or

@@ -50,6 +50,7 @@ class Step:
     rivals: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # other hypotheses within the margin
     note: str = ""  # why the status is not MATCHED, for the warnings
     contradicted: float = 0.0  # fraction of the points on space the map saw through (a wrong place)
+    expected: np.ndarray | None = None  # the scan's fit at the motion's prediction, where the pose is another
 
     def noted(self, text: str, status: ScanStatus | None = None) -> "Step":
         """This step with ``text`` added to its note (and its status replaced, when given)."""
@@ -214,7 +215,15 @@ class FrontEnd:
                 note = "; ".join(filter(None, [note, f"weak match (score {score:.2f}) turned "
                                                      f"{np.degrees(wrap_angle(pose[2] - primary[2])):.0f}° from the "
                                                      "motion's prediction, which stays a rival"]))
-        return Step(pose, cov, status, score, rivals, note, contradicted)
+        # the scan's own fit where the motion expected it, where it placed itself elsewhere: the decision's
+        # alternative, for the ending to weigh (:class:`radioslam.slam.rivals.Cause`)
+        expected = self._prediction_fit(grid, xy, phi, primary) if self._apart(pose, primary) else None
+        return Step(pose, cov, status, score, rivals, note, contradicted, expected)
+
+    def _apart(self, a: np.ndarray, b: np.ndarray) -> bool:
+        """Whether two poses are distinct (beyond ``distinct_m`` or ``distinct_deg``)."""
+        return bool(np.linalg.norm(a[:2] - b[:2]) > self.cfg.distinct_m or
+                    abs(wrap_angle(a[2] - b[2])) > np.radians(self.cfg.distinct_deg))
 
     def _search_region(self, phi: np.ndarray, map_normals: np.ndarray, hypotheses: list[Hypothesis],
                        last: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
@@ -270,13 +279,17 @@ class FrontEnd:
 
     def _with_prediction_fit(self, rivals: np.ndarray, grid: LikelihoodGrid, xy: np.ndarray, phi: np.ndarray,
                              primary: np.ndarray) -> np.ndarray:
-        """``rivals`` (R, 3) and the scan's own fit near the motion's prediction ``primary`` (within
-        ``distinct_m``), unless a rival lies within ``distinct_m`` of it already."""
-        fitted = correlative_match(grid, xy, phi, primary, self.cfg.distinct_m, np.radians(self.cfg.window_deg),
-                                   self.step_rad).pose
+        """``rivals`` (R, 3) and the scan's own fit near the motion's prediction ``primary``
+        (:meth:`_prediction_fit`), unless a rival lies within ``distinct_m`` of it already."""
+        fitted = self._prediction_fit(grid, xy, phi, primary)
         if len(rivals) and np.min(np.linalg.norm(rivals[:, :2] - fitted[:2], axis=1)) <= self.cfg.distinct_m:
             return rivals
         return np.vstack([rivals, fitted])
+
+    def _prediction_fit(self, grid: LikelihoodGrid, xy: np.ndarray, phi: np.ndarray, primary: np.ndarray) -> np.ndarray:
+        """The scan's best fit (3,) within ``distinct_m`` of the motion's prediction ``primary``."""
+        return correlative_match(grid, xy, phi, primary, self.cfg.distinct_m, np.radians(self.cfg.window_deg),
+                                 self.step_rad).pose
 
     def _across(self, rivals: np.ndarray, pose: np.ndarray, weak: np.ndarray) -> np.ndarray:
         """The rivals that differ from ``pose`` other than by sliding along the weak direction."""

@@ -2,15 +2,17 @@
 its alternative, and the ending weighs each as a whole trajectory.
 
 A decision places one scan: the front end's choice among turned poses the scan alone cannot tell apart (an
-ambiguous scan's turned rivals), a fork's decision for its rival (the branch it left), a relocalization (taken
-at odds above 1 : 1, the front end's own pose left) and a lost-and-found trial's jump (confirmed at the ending's
-odds, the walk without the jump left). Each alternative is kept as its step into that scan from the pose before
-it; at the walk's end it is the answer's trajectory with that step replaced and every later pose carried with
-it (a rigid branch, as in max-mixtures: Olson & Agarwal, RSS 2012, keep the alternatives and let the whole
-data weigh them). The ending (:mod:`radioslam.slam.ending`) scores each by its posterior; one within the stated
-odds of the answer, or better, makes the trajectory ambiguous. A branch carried rigidly is rescored only where
-its map changes (:meth:`radioslam.slam.ending.Judge.scan_terms`), so keeping every alternative costs the
-scans near each decision, not the walk.
+ambiguous scan's turned rivals), its choice of a pose the motion did not expect (taken against the motion
+prior's odds beyond the ending's, the scan's own fit at the expected step left), a fork's decision for its
+rival (the branch it left), a relocalization (taken at odds above 1 : 1, the front end's own pose left) and a
+lost-and-found trial's jump (confirmed at the ending's odds, the walk without the jump left). Each alternative
+is kept as its step into that scan from the pose before it; at the walk's end it is the answer's trajectory
+with that step replaced and every later pose carried with it (a rigid branch, as in max-mixtures: Olson &
+Agarwal, RSS 2012, keep the alternatives and let the whole data weigh them), its step aligned by the scans
+after it (:meth:`radioslam.slam.ending.Judge.aligned`). The ending (:mod:`radioslam.slam.ending`) scores each
+by its posterior; one within the stated odds of the answer, or better, makes the trajectory ambiguous. A
+branch carried rigidly is rescored only where its map changes (:meth:`radioslam.slam.ending.Judge.scan_terms`),
+so keeping every alternative costs the scans near each decision, not the walk.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ class Cause(str, Enum):
     FORK = "the branch a fork's decision left"
     RELOCALIZATION = "the front end's pose a relocalization replaced"
     JUMP = "the walk without a confirmed jump"
+    EXPECTED = "the step the motion expected, where the scan placed itself against the motion's odds"
 
 
 @dataclass(frozen=True)

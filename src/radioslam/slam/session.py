@@ -101,9 +101,11 @@ class SlamSession:
         # 4. a score drop opens a trial elsewhere in the map; once confirmed by the scans after it, the
         #    terminal was carried there (kidnapped): every scan of the trial is relocalized
         step, relocalizations = self._taken_elsewhere(k, step, points, relocalizations)
-        # 5. the pose and the factors tying it to the previous one into the pose graph
+        # 5. the pose and the factors tying it to the previous one into the pose graph; the decision's
+        #    alternatives kept for the ending (an ambiguous scan's turned rivals, the motion's expected step)
         back_end.add(k, step, self.front_end.motion.odometry_step(k))
-        forks.remember(k, step, back_end.estimates, self.loop_closer)  # an ambiguous scan's turned rivals
+        forks.remember(k, step, back_end.estimates, self.loop_closer)
+        self._keep_expected(k, step)
         # 6. the scan joins the local map and the current submap; the motion model learns the step
         self._insert(k, step, points, scan)
         # 7. loop closures against older submaps near the pose (sampled while the walk is tied to the map)
@@ -126,6 +128,18 @@ class SlamSession:
         points = prepare_points(scan, cfg.scan, cfg.grid)
         self.sightings.append(points.sightings)
         return scan, points, thinned
+
+    def _keep_expected(self, k: int, step: Step) -> None:
+        """Step 5: where the scan placed itself against the motion's odds (its step less probable under the motion
+        prior than the expected one, by more than the ending's stated odds), the scan's fit at the expected step
+        stays the decision's alternative; a step the motion expects about as well is the motion's own
+        uncertainty, not a decision."""
+        if step.expected is None:
+            return
+        last = self.back_end.estimates[k - 1]
+        against = self.posterior.step_term(k, last, step.expected) - self.posterior.step_term(k, last, step.pose)
+        if against > np.log(self.cfg.ending.odds):
+            self.rivals.keep_poses(k, last, step.expected, Cause.EXPECTED)
 
     def _relocalized(self, k: int, step: Step, points) -> tuple[Step, list[LoopClosure]]:
         """Step 3: the step, relocalized where a lost scan's posterior in the whole map beats the front end's pose
@@ -242,11 +256,13 @@ class SlamSession:
         odometry = odometry_in_map_frame(motion.odometry, result.poses[0]) if motion.odometry is not None else None
         if odometry is not None:
             candidates.append((Source.ODOMETRY, odometry))
-        judge = Judge.from_config(self.cfg, self.posterior)
-        branches = [(rival.key, poses) for rival, poses in self.rivals.branches(result.poses)]
+        judge, scans = Judge.from_config(self.cfg, self.posterior), self.loop_closer.points
+        answer = judge.scan_terms(result.poses, scans)
+        branches = [(rival.key, judge.aligned(rival.key, poses, scans)) for rival, poses in
+                    self.rivals.branches(result.poses)]
         candidates += [(Source.RIVAL_BRANCH, poses) for poses in
-                       judge.shortlist(branches, self.loop_closer.points, self.cfg.ending.hypotheses)]
-        ending = judge.judge(candidates, self.loop_closer.points)
+                       judge.shortlist(branches, answer, scans, self.cfg.ending.hypotheses)]
+        ending = judge.judge(candidates, scans, [answer])
         best, runner_up = ending.best, ending.runner_up
         lines = []
         if best.source is not Source.POSE_GRAPH:
