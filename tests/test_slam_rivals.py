@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from test_slam_ending import _in_frame, _room, _scans
+from test_slam_ending import _in_frame, _judge, _room, _scans
 from test_slam_forks import recorded_scans
 
 from radioslam.slam.config import SlamConfig
@@ -15,7 +15,7 @@ from radioslam.slam.ending import Judge, Source
 from radioslam.slam.motion import MotionModel
 from radioslam.slam.posterior import Posterior
 from radioslam.slam.rivals import Cause, Rivals
-from radioslam.slam.se2 import between, compose, wrap_angle
+from radioslam.slam.se2 import between, compose, inverse, wrap_angle
 
 poses_strategy = st.lists(st.tuples(st.floats(-5, 5), st.floats(-5, 5), st.floats(-3.1, 3.1)), min_size=3,
                           max_size=12)
@@ -131,3 +131,60 @@ def test_a_symmetric_room_walked_smoothly_is_never_confidently_wrong():
     result = RadioSlam().run(recorded_scans("symmetric-mirror-figure-eight-5020-scans.npz"))
     assert ate_rmse(result.poses, truth) <= 0.2 or (
         result.ambiguous_trajectory and ate_rmse(result.alternative, truth) <= 0.2)
+
+
+def test_a_wrong_turn_the_walk_took_back_is_found_as_an_excursion():
+    """A room walked round: the SLAM took scans 10–15 turned by 90° about scan 10 (a wrong turn) and came back
+    to the true walk at scan 16 (the turn taken back by a second surprise). The alternative kept at scan 10 (the
+    true step) carries every later pose, so the walk after 16 would turn with it; the excursion that returns to
+    the answer at 16 is the true walk, and it beats the answer. A turned branch whose return would need a jump
+    the motion does not expect gives no excursion."""
+    segments = _room([[0, 0], [14, 0], [14, 8], [0, 8]])
+    t = np.linspace(0, 2 * np.pi, 33)[:-1]
+    world = np.column_stack([7 + 4.0 * np.cos(t), 4 + 2.2 * np.sin(t), t + np.pi / 2])
+    scans, truth = _scans(segments, world, specular=True), _in_frame(world)
+    fork, back = 10, 16
+    answer = truth.copy()
+    turn = compose(truth[fork], compose(np.array([0.0, 0.0, np.pi / 2]), inverse(truth[fork])))
+    answer[fork:back] = compose(turn, truth[fork:back])
+    rivals = Rivals()
+    rivals.keep_poses(fork, answer[fork - 1], truth[fork], Cause.TURNED)
+    cfg = SlamConfig()
+    judge = Judge.from_config(cfg, Posterior.from_config(cfg, MotionModel.from_config(cfg.motion, None)))
+    branches = [(rival.key, poses) for rival, poses in rivals.branches(answer)]
+    excursions = judge.excursions(branches, answer)
+    assert any(key == fork and np.allclose(poses, truth, atol=1e-9) for key, poses in excursions)
+    ending = judge.judge([(Source.POSE_GRAPH, answer)] + [(Source.RIVAL_BRANCH, p) for _, p in branches + excursions],
+                         scans)
+    assert ending.best.source is Source.POSE_GRAPH and ending.ambiguous and ending.runner_up_odds < 1.0
+    assert np.allclose(ending.runner_up.poses, truth, atol=1e-9)
+    # the true walk, with a rival turned by 90° at scan 10: no return to it is a step the motion expects
+    turned = Rivals()
+    turned.keep_poses(fork, truth[fork - 1], compose(turn, truth[fork]), Cause.TURNED)
+    assert judge.excursions([(r.key, p) for r, p in turned.branches(truth)], truth) == []
+
+
+def test_an_excursion_rescores_only_the_scans_whose_map_it_changes():
+    """A long hall walked along, and an excursion: scans 10–15 turned by 90° about scan 10, the walk from 16 on as
+    it was. A scan's term depends on its own pose and its map's alone, so the scans judged against the same scans,
+    all unmoved, keep the answer's terms (the very floats), and those judged against a moved scan are judged
+    afresh."""
+    segments = _room([[0, 0], [40, 0], [40, 4], [0, 4]])
+    truth = _in_frame(np.column_stack([np.linspace(1, 37, 41), np.full(41, 2.0), np.zeros(41)]))
+    scans = _scans(segments, np.column_stack([np.linspace(1, 37, 41), np.full(41, 2.0), np.zeros(41)]))
+    fork, back = 10, 16
+    excursion = truth.copy()
+    turn = compose(truth[fork], compose(np.array([0.0, 0.0, np.pi / 2]), inverse(truth[fork])))
+    excursion[fork:back] = compose(turn, truth[fork:back])
+    judge = _judge()
+    scored = judge.scan_terms(truth, scans)
+    judged, scan_term = [], judge.posterior.scan_term
+    judge.posterior.scan_term = lambda points, pose, *args: judged.append(pose) or scan_term(points, pose, *args)
+    reused = judge.scan_terms(excursion, scans, [scored])
+    judge.posterior.scan_term = scan_term
+    fresh = judge.scan_terms(excursion, scans)
+    unmoved = [i for i, near in enumerate(reused.near) if i + 1 >= back and near == scored.near[i]
+               and all(m < fork or m >= back for m in near)]
+    moved = [i for i in range(len(reused.terms)) if i + 1 >= fork and i not in unmoved]
+    assert len(unmoved) >= 15 and all(reused.terms[i] == scored.terms[i] == fresh.terms[i] for i in unmoved)
+    assert len(judged) == len(moved) and all(reused.terms[i] == fresh.terms[i] for i in moved)  # judged afresh

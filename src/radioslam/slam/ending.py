@@ -5,9 +5,10 @@ The hypotheses: the pose graph's solution (with the plane adjustment), the exter
 (placed at the first pose), and every decision's alternative (:mod:`radioslam.slam.rivals`: an ambiguous
 scan's turned rival, the motion's expected step where the scan overrode it, the branch a fork's decision
 left, the pose a relocalization replaced, the walk without a confirmed jump; each the answer with that one step
-replaced, every later pose carried with it, the step aligned by the scans after it, :meth:`Judge.aligned`; the
-``ending.hypotheses`` of highest odds over the answer screened on a sample of the scans each changes,
-:meth:`Judge.shortlist`). The front end's own
+replaced, every later pose carried with it, the step aligned by the scans after it, :meth:`Judge.aligned`; and
+each one's excursions, returning to the answer where the answer's own step of return is a surprise,
+:meth:`Judge.excursions`; the ``ending.hypotheses`` of highest odds over the answer screened on a sample of
+the scans each changes, :meth:`Judge.shortlist`). The front end's own
 chain is no hypothesis here: it is greedy in exactly this likelihood (each scan placed on its predecessors), and beat
 the loop-corrected trajectory on it where the latter was ten times closer to the truth (docs/notes.md,
 session 28). Two that agree (every pose within ``same_m`` and ``same_deg``) are one. Each trajectory T scores
@@ -34,11 +35,11 @@ from enum import Enum
 
 import numpy as np
 
-from radioslam.slam.posterior import Posterior
+from radioslam.slam.posterior import Posterior, extent_m2
 from radioslam.slam.refine import refine_poses
 from radioslam.slam.result import scan_ranges
 from radioslam.slam.scan_points import ScanPoints, fused_points, map_grid
-from radioslam.slam.se2 import compose, inverse, wrap_angle
+from radioslam.slam.se2 import between, compose, inverse, wrap_angle
 from radioslam.slam.status import ScanStatus
 
 
@@ -161,6 +162,27 @@ class Judge:
         motion = self.posterior.trajectory_prior(poses) - self.posterior.trajectory_prior(answer.poses)
         return (len(changed) / len(sample) * gain if sample else 0.0) + motion
 
+    def excursions(self, branches: list[tuple[int, np.ndarray]], answer: np.ndarray) -> list[tuple[int, np.ndarray]]:
+        """The branches (fork scan, (P, 3) poses) that return to the ``answer``: for each branch and each later scan
+        k whose step from the branch into the answer's pose k is more probable under the motion prior than the
+        answer's own step into it, by more than the stated odds, the branch up to k − 1 and the answer from k on
+        (fork scan, poses). A decision the walk undid later (a wrong turn taken back by another, a kidnap that
+        returns) is no branch that carries every later pose; there, the answer's step of return is a surprise
+        that the excursion does not need."""
+        area = extent_m2(answer)
+        velocity = between(answer[:-2], answer[1:-1])
+        own = [self.posterior.step_term(k, answer[k - 1], answer[k], area, velocity[k - 2])
+               for k in range(2, len(answer))]
+        out = []
+        for key, poses in branches:
+            for k in range(max(key + 1, 2), len(answer)):
+                back = self.posterior.step_term(k, poses[k - 1], answer[k], area, between(poses[k - 2], poses[k - 1]))
+                if back > own[k - 2] + np.log(self.odds):
+                    excursion = poses.copy()
+                    excursion[k:] = answer[k:]
+                    out.append((key, excursion))
+        return out
+
     def aligned(self, key: int, poses: np.ndarray, scans: dict[int, ScanPoints]) -> np.ndarray:
         """A branch from scan ``key`` on with its jump refined: the scans from ``key`` on, one rigid body at the
         branch's poses, fitted onto the map of the scans before ``key`` near them, within ``align_m`` and
@@ -218,17 +240,20 @@ class Judge:
 
     def _judged(self, poses: np.ndarray, keys: list[int], other: "Scored | None"):
         """Per scan but the first: (its index i in ``keys``, its key, the scans before it near it, whether it
-        scores as on ``other``, a scored trajectory: before the first pose where the two differ, or judged
-        against the same scans where ``poses`` go on as ``other`` carried rigidly)."""
+        scores as on ``other``, a scored trajectory). A scan's term depends on its own pose and those of the
+        scans it is judged against alone, and not on one rigid motion of them all: it is ``other``'s wherever
+        the same scans are near and the scan and each of them moved from ``other``'s poses by one rigid motion
+        (none before the first pose where the two differ; a carried branch's jump after it; an excursion's,
+        and none again from its return on)."""
         differ = np.flatnonzero(np.any(other.poses != poses, axis=1)) if other is not None else np.zeros(1, int)
         shared = int(differ[0]) if len(differ) else len(poses)
-        rigid = other is not None and shared < len(poses) and carried_rigidly(other.poses, poses, shared)
+        moves = compose(poses, inverse(other.poses)) if other is not None else None  # each pose's move from other's
         for i, k in enumerate(keys[1:], start=1):
             if k < shared:
                 yield i, k, other.near[i - 1], True
                 continue
             around = self.posterior.nearby(poses[k], keys[:i], poses)
-            yield i, k, around, rigid and around == other.near[i - 1] and all(m >= shared for m in around)
+            yield i, k, around, other is not None and around == other.near[i - 1] and _one_motion(moves[[k] + around])
 
     def warning(self, best: Hypothesis, runner_up: Hypothesis, odds: float, status: list, odometry: bool) -> str:
         """One line: the two trajectories, their odds, where they part (the scans beyond ``same_m`` or
@@ -263,11 +288,9 @@ class Scored:
     near: list[list[int]]
 
 
-def carried_rigidly(a: np.ndarray, b: np.ndarray, start: int, tolerance: float = 1e-9) -> bool:
-    """Whether poses ``b[start:]`` are ``a[start:]`` carried by one rigid transform."""
-    jump = compose(b[start], inverse(a[start]))
-    carried = compose(jump, a[start:])
-    d = carried - b[start:]
+def _one_motion(moves: np.ndarray, tolerance: float = 1e-9) -> bool:
+    """Whether rigid motions (M, 3) are one."""
+    d = moves - moves[0]
     d[:, 2] = wrap_angle(d[:, 2])
     return bool(np.abs(d).max() <= tolerance)
 

@@ -260,6 +260,7 @@ class SlamSession:
         answer = judge.scan_terms(result.poses, scans)
         branches = [(rival.key, judge.aligned(rival.key, poses, scans)) for rival, poses in
                     self.rivals.branches(result.poses)]
+        branches += judge.excursions(branches, result.poses)
         candidates += [(Source.RIVAL_BRANCH, poses) for poses in
                        judge.shortlist(branches, answer, scans, self.cfg.ending.hypotheses)]
         ending = judge.judge(candidates, scans, [answer])
