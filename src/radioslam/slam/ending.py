@@ -142,25 +142,29 @@ class Judge:
         (:meth:`screened`); each kept alternative then costs a scoring of every scan whose map it changes."""
         if len(branches) <= count:
             return [poses for _, poses in branches]
-        odds = [self.screened(poses, answer, scans) for _, poses in branches]
+        answer_prior = self.posterior.trajectory_prior(answer.poses)
+        odds = [self.screened(poses, answer, scans, answer_prior) for _, poses in branches]
         best = np.argsort(-np.array(odds), kind="stable")[:count]
         return [branches[i][1] for i in sorted(best)]
 
-    def screened(self, poses: np.ndarray, answer: "Scored", scans: dict[int, ScanPoints]) -> float:
-        """An estimate of a trajectory's log odds over the scored ``answer``: the whole motion term's difference,
-        and the scan terms' (:meth:`scan_terms`) on at most ``screened_scans`` of the scans it judges against
-        another map than the answer does, evenly spread over them and scaled to their number (on the others the
-        two score alike). The odds of a branch lie where the walk comes back to the places it saw before its
-        fork, which the fork scan alone does not show."""
+    def screened(self, poses: np.ndarray, answer: "Scored", scans: dict[int, ScanPoints],
+                 answer_prior: float | None = None) -> float:
+        """An estimate of a trajectory's log odds over the scored ``answer`` (its motion term ``answer_prior``,
+        where known): the whole motion term's difference, and the scan terms' (:meth:`scan_terms`) on at most
+        ``screened_scans`` of the scans it judges against another map than the answer does, evenly spread over
+        them and scaled to their number (on the others the two score alike). The odds of a branch lie where the
+        walk comes back to the places it saw before its fork, which the fork scan alone does not show."""
+        if answer_prior is None:
+            answer_prior = self.posterior.trajectory_prior(answer.poses)
+        motion = self.posterior.trajectory_prior(poses) - answer_prior
         keys = sorted(scans)
         changed = [(i, k, around) for i, k, around, alike in self._judged(poses, keys, answer) if not alike]
-        sample = [changed[j] for j in np.unique(np.linspace(0, len(changed) - 1, min(self.screened_scans,
-                                                                                        len(changed))).astype(int))] \
-            if changed else []
+        if not changed:
+            return motion
+        picked = np.unique(np.linspace(0, len(changed) - 1, min(self.screened_scans, len(changed))).astype(int))
         gain = sum(self.posterior.scan_term(scans[k], poses[k], keys[:i], poses, scans, around) - answer.terms[i - 1]
-                   for i, k, around in sample)
-        motion = self.posterior.trajectory_prior(poses) - self.posterior.trajectory_prior(answer.poses)
-        return (len(changed) / len(sample) * gain if sample else 0.0) + motion
+                   for i, k, around in (changed[j] for j in picked))
+        return len(changed) / len(picked) * gain + motion
 
     def excursions(self, branches: list[tuple[int, np.ndarray]], answer: np.ndarray) -> list[tuple[int, np.ndarray]]:
         """The branches (fork scan, (P, 3) poses) that return to the ``answer``: for each branch and each later scan
@@ -169,15 +173,12 @@ class Judge:
         (fork scan, poses). A decision the walk undid later (a wrong turn taken back by another, a kidnap that
         returns) is no branch that carries every later pose; there, the answer's step of return is a surprise
         that the excursion does not need."""
-        area = extent_m2(answer)
-        velocity = between(answer[:-2], answer[1:-1])
-        own = [self.posterior.step_term(k, answer[k - 1], answer[k], area, velocity[k - 2])
-               for k in range(2, len(answer))]
+        area, own = extent_m2(answer), self.posterior.step_terms(answer)  # own[k − 1]: the answer's step k
         out = []
         for key, poses in branches:
             for k in range(max(key + 1, 2), len(answer)):
                 back = self.posterior.step_term(k, poses[k - 1], answer[k], area, between(poses[k - 2], poses[k - 1]))
-                if back > own[k - 2] + np.log(self.odds):
+                if back > own[k - 1] + np.log(self.odds):
                     excursion = poses.copy()
                     excursion[k:] = answer[k:]
                     out.append((key, excursion))

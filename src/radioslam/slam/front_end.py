@@ -20,6 +20,7 @@ relocalize.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cache
 
 import numpy as np
 
@@ -126,6 +127,7 @@ class FrontEnd:
         grid, map_normals = self._local_grid(estimates)
         hypotheses = self.motion.hypotheses(k, last)
         primary = hypotheses[0].pose
+        prediction_fit = cache(lambda: self._prediction_fit(grid, xy, phi, primary))  # fitted once, if asked
         # every heading the scan's normals or the motion suggest over every translation within a step, or with
         # full odometry its step's Gaussian core
         centre, window, headings = self._search_region(phi, map_normals, hypotheses, last)
@@ -191,7 +193,7 @@ class FrontEnd:
             # (a corridor folded back onto itself explains a corner's scan better than the corner does,
             # whose new walls the map has not seen yet), and so does the prediction's own fit, where the
             # candidates, ranked against the turned one, missed it (a corner's clutter)
-            rivals = self._with_prediction_fit(np.vstack([rivals, candidates[by_motion]]), grid, xy, phi, primary)
+            rivals = self._with_prediction_fit(np.vstack([rivals, candidates[by_motion]]), prediction_fit())
             status = ScanStatus.AMBIGUOUS
             turn = np.degrees(wrap_angle(pose[2] - candidates[by_motion, 2]))
             note = "; ".join(filter(None, [note, f"turned {turn:.0f}° from the motion's choice, which stays a rival"]))
@@ -201,7 +203,7 @@ class FrontEnd:
             # a rival where it is turned from the pose taken (a fork's rival: narrow-corridor's fourth corner,
             # folded 1.6 m away, when 1 µm of range kept the motion's candidate out of branch and bound's list,
             # and with it the fork)
-            widened = self._with_prediction_fit(rivals, grid, xy, phi, primary)
+            widened = self._with_prediction_fit(rivals, prediction_fit())
             if len(widened) > len(rivals) and abs(wrap_angle(widened[-1, 2] - pose[2])) >= np.radians(cfg.distinct_deg):
                 rivals, status = widened, ScanStatus.AMBIGUOUS
                 note = "; ".join(filter(None, [note, f"{jump:.2f} m from the last pose, beyond a step: the "
@@ -217,7 +219,7 @@ class FrontEnd:
                                                      "motion's prediction, which stays a rival"]))
         # the scan's own fit where the motion expected it, where it placed itself elsewhere: the decision's
         # alternative, for the ending to weigh (:class:`radioslam.slam.rivals.Cause`)
-        expected = self._prediction_fit(grid, xy, phi, primary) if self._apart(pose, primary) else None
+        expected = prediction_fit() if self._apart(pose, primary) else None
         return Step(pose, cov, status, score, rivals, note, contradicted, expected)
 
     def _apart(self, a: np.ndarray, b: np.ndarray) -> bool:
@@ -277,11 +279,9 @@ class FrontEnd:
         merged, _ = distinct(both, np.zeros(len(both)), radius_m, radius_rad, 2 * count)
         return merged
 
-    def _with_prediction_fit(self, rivals: np.ndarray, grid: LikelihoodGrid, xy: np.ndarray, phi: np.ndarray,
-                             primary: np.ndarray) -> np.ndarray:
-        """``rivals`` (R, 3) and the scan's own fit near the motion's prediction ``primary``
-        (:meth:`_prediction_fit`), unless a rival lies within ``distinct_m`` of it already."""
-        fitted = self._prediction_fit(grid, xy, phi, primary)
+    def _with_prediction_fit(self, rivals: np.ndarray, fitted: np.ndarray) -> np.ndarray:
+        """``rivals`` (R, 3) and the scan's own fit near the motion's prediction (:meth:`_prediction_fit`),
+        unless a rival lies within ``distinct_m`` of it already."""
         if len(rivals) and np.min(np.linalg.norm(rivals[:, :2] - fitted[:2], axis=1)) <= self.cfg.distinct_m:
             return rivals
         return np.vstack([rivals, fitted])

@@ -90,13 +90,15 @@ class Posterior:
             max(self.placement(k, points, rival, last, earlier, poses, scans, area_m2) for rival in rivals)
 
     def trajectory_prior(self, poses: np.ndarray) -> float:
-        """Σ_k log p(step k) of a whole trajectory, each step's hypotheses those of its own last step (and the
-        odometry's step k); a jump (a relocalization's) anywhere within the trajectory's extent."""
-        total, velocity, area = 0.0, None, extent_m2(poses)
-        for k in range(1, len(poses)):
-            total += self.step_term(k, poses[k - 1], poses[k], area, velocity)
-            velocity = between(poses[k - 1], poses[k])
-        return total
+        """Σ_k log p(step k) of a whole trajectory (:meth:`step_terms`)."""
+        return sum(self.step_terms(poses), 0.0)
+
+    def step_terms(self, poses: np.ndarray) -> list[float]:
+        """log p(step k) for k = 1 … P − 1 of a trajectory, each step's hypotheses those of its own last step
+        (and the odometry's step k); a jump (a relocalization's) anywhere within the trajectory's extent."""
+        area = extent_m2(poses)
+        velocity = [None] + list(between(poses[:-2], poses[1:-1]))
+        return [self.step_term(k, poses[k - 1], poses[k], area, velocity[k - 1]) for k in range(1, len(poses))]
 
 
 def extent_m2(poses: np.ndarray) -> float:
