@@ -4,11 +4,10 @@ a terminal, warnings are counted, and SIGINT/SIGTERM end in one line, exit 130/1
 import json
 import signal
 import subprocess
-import sys
 import time
 
 import pytest
-from cli_process import cli
+from cli_process import cli, cli_argv
 
 
 @pytest.mark.parametrize("name", [":thumbs_up:.yaml", "radioslam:radio:[bold]x[/bold].yaml",
@@ -24,9 +23,9 @@ def test_a_signal_ends_a_run_in_one_line_leaving_no_temporary_file_and_the_stage
     out = tmp_path / "R"
     # SIGINT as a terminal would deliver it: a shell starting this test in the background ignores it (and
     # the child would inherit that), so the child gets the default disposition back
-    proc = subprocess.Popen([sys.executable, "-m", "radioslam.cli", "demo", "--out", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    proc = subprocess.Popen(cli_argv("demo", "--out", out,
+                                     prelude="import signal; signal.signal(signal.SIGINT, signal.default_int_handler)"),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
     def sensing() -> bool:
         try:
@@ -40,7 +39,7 @@ def test_a_signal_ends_a_run_in_one_line_leaving_no_temporary_file_and_the_stage
     time.sleep(0.3)  # into the scans
     proc.send_signal(sig)
     _, stderr = proc.communicate(timeout=60)
-    assert proc.returncode == code
+    assert proc.returncode == code, stderr
     assert stderr.count("\n") == 1 and f"radioslam: {word}" in stderr, stderr
     assert not list(out.rglob("*.tmp"))
     sense = json.loads((out / "run.json").read_text())["stages"]["sense"]
@@ -48,24 +47,18 @@ def test_a_signal_ends_a_run_in_one_line_leaving_no_temporary_file_and_the_stage
     assert "radioslam: error: " in cli("slam", out).stderr  # and the next stage refuses it
 
 
-def _file_size_limit(limit: int):
-    """In the child: writes past ``limit`` bytes fail with EFBIG (a full disk's stand-in), no SIGXFSZ kill."""
-    import resource
-
-    def apply():
-        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
-        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
-
-    return apply
+# in the child: writes past the limit fail with EFBIG (a full disk's stand-in), no SIGXFSZ kill
+_FILE_SIZE_LIMIT = ("import resource, signal; signal.signal(signal.SIGXFSZ, signal.SIG_IGN); "
+                    "resource.setrlimit(resource.RLIMIT_FSIZE, ({limit}, {limit}))")
 
 
 def test_a_write_that_fails_names_the_file_being_written_and_leaves_no_half_written_one(tmp_path):
     # numpy's tofile says only "N requested and M written", naming no file: the writer names it
     out = tmp_path / "R"
-    done = subprocess.run([sys.executable, "-m", "radioslam.cli", "simulate", "single-plate:3", "--out", str(out),
-                           "--save-iq"], capture_output=True, text=True, timeout=300,
-                          preexec_fn=_file_size_limit(1_000_000))
-    assert done.returncode == 2
+    done = subprocess.run(cli_argv("simulate", "single-plate:3", "--out", out, "--save-iq",
+                                   prelude=_FILE_SIZE_LIMIT.format(limit=1_000_000)),
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2, done.stderr
     assert done.stderr.count("\n") == 1, done.stderr
     assert f"radioslam: error: {out / 'captures' / '0000.sigmf-data'}: (file): " in done.stderr
     assert "a short write, the disk full or a file-size limit reached" in done.stderr
