@@ -302,7 +302,8 @@ def test_a_match_slid_along_its_walls_is_settled_by_the_wall_facing_along_them()
     tight, still = np.diag([1e-4, 1e-4, 1e-6]), np.zeros(3)
     weak = test.matched_weak(both, still, scan, normals, tight)
     assert weak is not None and abs(weak[0]) == pytest.approx(1.0)
-    settled = test.settled(both, still, scan, normals, weak, 1.3)
+    ones, flat = np.ones(len(scan)), lambda poses: np.zeros(len(poses))
+    settled = test.settled(both, still, scan, normals, ones, weak, 1.3, flat)
     assert settled == pytest.approx([0.6, 0.0, 0.0], abs=0.05 + 1e-9)  # within a cell: trials a cell apart
     assert test.matched_weak(both, settled, scan, normals, tight) is None
     # standing still is no rival of the settled match: the across wall's points tell them apart; a turned
@@ -310,8 +311,31 @@ def test_a_match_slid_along_its_walls_is_settled_by_the_wall_facing_along_them()
     rivals = np.array([still, settled + [0.0, 0.0, 0.5]])
     assert test.told_apart(both, settled, scan, normals, rivals, 0.08, np.radians(6.0)).tolist() == [True, False]
     one_wall = LikelihoodGrid.from_points(along, 0.05, 0.05, 1.0, np.full(61, -np.pi / 2), np.radians(1.0), 0.5)
-    assert test.settled(one_wall, still, scan, normals, weak, 1.3) is None
+    assert test.settled(one_wall, still, scan, normals, ones, weak, 1.3, flat) is None
     assert test.told_apart(one_wall, settled, scan, normals, rivals[:1], 0.08, np.radians(6.0)).tolist() == [False]
+
+
+def test_a_slide_along_the_walls_is_the_posterior_s_the_facing_echoes_against_the_motion():
+    """The settle weighs the echoes that face along the slide against the motion's prior of the step: the
+    across wall seen as one echo (its arc's 41 points weighing 1/41 each: a few nats at most) does not move a
+    robot 0.6 m off a step it predicted to 10 cm (18 nats); the same wall as 41 independent echoes does, and
+    so does the one echo where the motion says nothing."""
+    from radioslam.slam.degeneracy import DegeneracyTest
+    from radioslam.slam.motion_prior import PLATFORMS, MotionPrior, Platform
+
+    test = DegeneracyTest(4.0, 0.5, 6, 2.0)
+    along = np.column_stack([np.linspace(-3, 3, 61), np.full(61, 2.0)])
+    across = np.column_stack([np.full(41, 4.0), np.linspace(-2, 2, 41)])
+    normals = np.concatenate([np.full(61, -np.pi / 2), np.full(41, np.pi)])
+    both = LikelihoodGrid.from_points(np.vstack([along, across]), 0.05, 0.05, 1.0, normals, np.radians(1.0), 0.5)
+    scan, still, weak = np.vstack([along, across]) - [0.6, 0.0], np.zeros(3), np.array([1.0, 0.0])
+    robot = MotionPrior.of(np.zeros((1, 3)), PLATFORMS[Platform.ROBOT], 1.3)  # the step predicted: none
+    one_echo = np.concatenate([np.full(61, 1 / 61), np.full(41, 1 / 41)])
+    assert test.settled(both, still, scan, normals, one_echo, weak, 1.3, robot.log_prob) is None
+    independent = test.settled(both, still, scan, normals, np.ones(len(scan)), weak, 1.3, robot.log_prob)
+    assert independent == pytest.approx([0.6, 0.0, 0.0], abs=0.05 + 1e-9)
+    unknown = test.settled(both, still, scan, normals, one_echo, weak, 1.3, lambda poses: np.zeros(len(poses)))
+    assert unknown == pytest.approx([0.6, 0.0, 0.0], abs=0.05 + 1e-9)
 
 
 def test_pace_is_the_median_observed_step_along_the_predicted_travel():

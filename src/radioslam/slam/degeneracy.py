@@ -23,8 +23,11 @@ J counts the points that agree with the map at the match, so a match misplaced a
 direction makes that direction weak by itself: the walls facing along it (an end wall ahead)
 disagree and drop out, while the points on the walls parallel to it, scored point to point,
 land on the previous scan's at a zero step. Before remapping, :meth:`DegeneracyTest.settled`
-slides the match along the weak direction to where the walls facing along it agree best;
-where the match there is no longer degenerate, the direction was never weak.
+slides the match along the weak direction to the slide of highest posterior (the walls facing
+along it, one observation per echo, against the motion's prior of the step): where the match
+there is no longer degenerate, the direction was never weak. Weighed by likelihood alone, one
+echo of a surface facing along the slide could carry the match a metre off a step the motion
+predicted well.
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.measurement import scan_log_likelihoods
 from radioslam.slam.refine import fit_scores
 from radioslam.slam.se2 import rotation, transform_points, wrap_angle
 
@@ -65,19 +69,22 @@ class DegeneracyTest:
         return self.weak(points[agree], normals[agree], pose[2], covariance)
 
     def settled(self, grid: LikelihoodGrid, pose: np.ndarray, points: np.ndarray, normals: np.ndarray,
-                weak: np.ndarray, span: float) -> np.ndarray | None:
-        """``pose`` slid along the world direction ``weak`` (unit, 2) within ±``span`` to where the points
-        whose specular normals face along it (within 45°: they measure the offset along it, point to
-        plane) fit the map best, on the grid's cells; None without such points, or when they fit best
-        where the match already is."""
+                weights: np.ndarray, weak: np.ndarray, span: float, log_prior) -> np.ndarray | None:
+        """``pose`` slid along the world direction ``weak`` (unit, 2) within ±``span`` to the slide of highest
+        posterior: the log-likelihood of the points whose specular normals face along it (within 45°: they
+        measure the offset along it, point to plane; :func:`radioslam.slam.measurement.scan_log_likelihoods`,
+        each point at its ``weights``) plus ``log_prior`` (a callable: poses (N, 3) → (N,), the motion's log
+        prior of the step to each), on the grid's cells; None without such points, or when the match is
+        already the most probable slide."""
         facing = facing_along(normals, pose[2], weak)
         if not facing.any():
             return None
         slide = grid.resolution * np.arange(-np.ceil(span / grid.resolution), np.ceil(span / grid.resolution) + 1)
         trials = pose + slide[:, None] * np.array([weak[0], weak[1], 0.0])
-        fit = fit_scores(grid, points[facing], normals[facing], trials)
-        best = int(np.argmax(fit))
-        return None if fit[best] <= fit[len(slide) // 2] else trials[best]  # the middle trial: ``pose``
+        posterior = scan_log_likelihoods(grid, points[facing], normals[facing], weights[facing], trials) + \
+            log_prior(trials)
+        best = int(np.argmax(posterior))
+        return None if posterior[best] <= posterior[len(slide) // 2] else trials[best]  # the middle trial: ``pose``
 
     def told_apart(self, grid: LikelihoodGrid, pose: np.ndarray, points: np.ndarray, normals: np.ndarray,
                    rivals: np.ndarray, margin: float, turn: float) -> np.ndarray:

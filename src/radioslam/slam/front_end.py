@@ -169,7 +169,7 @@ class FrontEnd:
         status, note = ScanStatus.MATCHED, ""
         if weak is not None:
             # a direction the match made weak itself: the walls facing along it agree elsewhere on it
-            pose, cov, weak, note = self._settle(grid, pose, cov, points, weak)
+            pose, cov, weak, note = self._settle(k, last, grid, pose, cov, points, weak)
         # a slide the walls facing along it tell apart is no rival (the others' points land alike)
         rivals, undecided = (r[~self.degeneracy.told_apart(grid, pose, xy, phi, r, cfg.ambiguity_margin,
                                                            np.radians(cfg.distinct_deg))] for r in (rivals, undecided))
@@ -242,13 +242,16 @@ class FrontEnd:
         headings = self.heading_search.headings(phi, map_normals, [h.pose[2] for h in hypotheses])
         return last[:2], self.motion_cfg.max_step_m, headings
 
-    def _settle(self, grid: LikelihoodGrid, pose: np.ndarray, cov: np.ndarray, points: ScanPoints,
-                weak: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, str]:
-        """A degenerate match slid along its weak direction to where the walls facing along it fit
-        (:meth:`DegeneracyTest.settled`), with the covariance there, when it is no longer degenerate
+    def _settle(self, k: int, last: np.ndarray, grid: LikelihoodGrid, pose: np.ndarray, cov: np.ndarray,
+                points: ScanPoints, weak: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, str]:
+        """A degenerate match slid along its weak direction to the slide the walls facing along it and the
+        motion's prior of scan k's step from ``last`` make most probable (:meth:`DegeneracyTest.settled`),
+        with the covariance there, when it is no longer degenerate
         there; else the match as it was."""
         cfg, xy, phi = self.cfg, points.xy, points.normals
-        settled = self.degeneracy.settled(grid, pose, xy, phi, weak, self.motion_cfg.max_step_m)
+        prior, span = self.motion.prior(k, last), self.motion_cfg.max_step_m
+        settled = self.degeneracy.settled(grid, pose, xy, phi, points.observation_weights, weak, span,
+                                          lambda poses: prior.log_prob(between(last, poses)))
         if settled is None:
             return pose, cov, weak, ""
         settled = refine_poses(grid, xy, phi, settled, self.grid_cfg.resolution_m, self.step_rad)[0]
