@@ -246,8 +246,7 @@ class FrontEnd:
                 points: ScanPoints, weak: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, str]:
         """A degenerate match slid along its weak direction to the slide the walls facing along it and the
         motion's prior of scan k's step from ``last`` make most probable (:meth:`DegeneracyTest.settled`),
-        with the covariance there, when it is no longer degenerate
-        there; else the match as it was."""
+        with the covariance there, when it is no longer degenerate there; else the match as it was."""
         cfg, xy, phi = self.cfg, points.xy, points.normals
         prior, span = self.motion.prior(k, last), self.motion_cfg.max_step_m
         settled = self.degeneracy.settled(grid, pose, xy, phi, points.observation_weights, weak, span,
