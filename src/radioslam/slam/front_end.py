@@ -20,7 +20,7 @@ relocalize.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from functools import cache
+from functools import cache, partial
 
 import numpy as np
 
@@ -248,9 +248,8 @@ class FrontEnd:
         motion's prior of scan k's step from ``last`` make most probable (:meth:`DegeneracyTest.settled`),
         with the covariance there, when it is no longer degenerate there; else the match as it was."""
         cfg, xy, phi = self.cfg, points.xy, points.normals
-        prior, span = self.motion.prior(k, last), self.motion_cfg.max_step_m
-        settled = self.degeneracy.settled(grid, pose, xy, phi, points.observation_weights, weak, span,
-                                          lambda poses: prior.log_prob(between(last, poses)))
+        settled = self.degeneracy.settled(grid, pose, xy, phi, points.observation_weights, weak,
+                                          self.motion_cfg.max_step_m, partial(self.motion.log_prob, k, last))
         if settled is None:
             return pose, cov, weak, ""
         settled = refine_poses(grid, xy, phi, settled, self.grid_cfg.resolution_m, self.step_rad)[0]

@@ -96,6 +96,11 @@ class MotionModel:
         gyro = None if step is None else (float(step[2]), float(self.odometry_sigmas[2]))
         return MotionPrior.of(steps, self.platform, self.max_step_m, gyro=gyro, pace_known=self.velocity is not None)
 
+    def log_prob(self, k: int, last: np.ndarray, poses: np.ndarray, area_m2: float | None = None) -> np.ndarray:
+        """log p(pose k | pose k − 1 at ``last``) (C,) at ``poses`` (C, 3): the step's prior (:meth:`prior`), its
+        unexpected share beyond the front end's window spread over ``area_m2`` (:meth:`MotionPrior.log_prob`)."""
+        return self.prior(k, last).log_prob(between(last, np.atleast_2d(poses)), area_m2)
+
     def hypotheses(self, k: int, last: np.ndarray) -> list[Hypothesis]:
         """Where pose k may be, given pose k − 1 at ``last``; the primary hypothesis first."""
         out = []

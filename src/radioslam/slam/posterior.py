@@ -71,7 +71,7 @@ class Posterior:
         (the branch's own last step; by default the walk's), its unexpected share uniform over ``area_m2``
         (a relocalization's search) or else over the front end's window."""
         motion = self.motion if velocity is KEEP else replace(self.motion, velocity=velocity, speeds=[])
-        return float(motion.prior(k, last).log_prob(between(last, pose)[None], area_m2)[0])
+        return float(motion.log_prob(k, last, pose, area_m2)[0])
 
     def placement(self, k: int, points: ScanPoints, pose: np.ndarray, last: np.ndarray, earlier: list[int], poses,
                   scans: dict[int, ScanPoints], area_m2: float | None = None, velocity=KEEP) -> float:
