@@ -57,7 +57,7 @@ class LikelihoodGrid:
     values: np.ndarray  # (NX, NY) in [0, 1], or −penalty on known free space
     origin: np.ndarray  # (2,) world position of cell (0, 0)'s lower-left corner
     resolution: float
-    normals: np.ndarray  # (NX, NY) world normal of the nearest map point, NaN: unknown
+    normals: np.ndarray | None  # (NX, NY) world normal of the nearest map point, NaN: unknown; None: normal_cells
     normal_sigma: float
     plane: np.ndarray | None = None  # (NX, NY) point-to-plane field; None: as ``values``
     phasor: np.ndarray | None = None  # (NX, NY) e^{iψ} of ``normals``, 0 where unknown; None: computed
@@ -69,6 +69,9 @@ class LikelihoodGrid:
     # (J, 3) where the map's scans were taken (x, y) and how far each saw (its farthest echo): whether the map
     # could have detected a surface of a given orientation (:mod:`radioslam.slam.measurement`); None: unknown
     viewpoints: np.ndarray | None = None
+    # ``normals`` held sparse: (ascending flat cells ix·NY + iy, the nearest map point's world normal there), NaN
+    # elsewhere (a map normal matters only near the map: a whole-grid array would cost more than the field)
+    normal_cells: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def plane_values(self) -> np.ndarray:
@@ -99,37 +102,41 @@ class LikelihoodGrid:
         origin = low - margin
         shape = tuple(np.ceil((high + margin - origin) / resolution).astype(int) + 1)
         cells = np.floor((points - origin) / resolution).astype(np.intp)
-        owner = np.full(shape, -1, dtype=np.intp)  # the map point of each hit cell (the last one wins)
-        owner[cells[:, 0], cells[:, 1]] = np.arange(len(points))
-        # the nearest hit cell of every cell, and the offset (in cells) from it
+        owner = np.full(shape, -1, dtype=np.int32)  # the map point of each hit cell (the last one wins)
+        owner[cells[:, 0], cells[:, 1]] = np.arange(len(points), dtype=np.int32)
+        # the nearest hit cell of every cell, and the offset (in whole cells) from it
         ix, iy = distance_transform_edt(owner < 0, return_distances=False, return_indices=True)
-        dx = np.subtract(np.arange(shape[0], dtype=np.float32)[:, None], ix, dtype=np.float32).ravel()
-        dy = np.subtract(np.arange(shape[1], dtype=np.float32)[None, :], iy, dtype=np.float32).ravel()
-        cells2 = dx * dx + dy * dy  # squared distance to the nearest hit cell centre, in cells² (whole numbers)
-        d2 = cells2 * np.float32(resolution**2)
+        offset_x = (np.arange(shape[0], dtype=np.int32)[:, None] - ix).ravel()
+        offset_y = (np.arange(shape[1], dtype=np.int32)[None, :] - iy).ravel()
+        whole2 = offset_x * offset_x + offset_y * offset_y  # squared distance to the nearest hit cell centre, cells²
         # both fields vanish beyond 6σ and the plane reach: computed only on the cells within (a fraction);
         # a map normal matters only in a cell next to one where a field is positive (a point's bilinear
-        # corners hold its own cell), so normals are gathered a diagonal further
+        # corners hold its own cell), so normals are gathered a diagonal further. The whole-grid test is on
+        # integers, a cell wider; the exact one on the few cells it leaves
         reach = max(6 * sigma, plane_reach)
-        near = np.flatnonzero(d2 < reach**2 + resolution**2)
-        beside = np.flatnonzero(d2 < (reach + 2 * resolution) ** 2)
+        within = np.flatnonzero(whole2 <= int(np.ceil(((reach + 2 * resolution) / resolution) ** 2)) + 1)
+        cells2 = whole2[within].astype(np.float32)  # whole numbers below 2²⁴: exact
+        d2_within = cells2 * np.float32(resolution**2)
+        is_near = d2_within < reach**2 + resolution**2
+        is_beside = d2_within < (reach + 2 * resolution) ** 2
+        near, beside = within[is_near], within[is_beside]
         nearest = np.take(owner, ix.ravel()[beside] * shape[1] + iy.ravel()[beside])  # the map point there
         # per map point first (few), then gathered: the nearest map point's normal in those cells
         normal_p = np.full(len(points), np.nan) if normals is None else np.asarray(normals, dtype=np.float64)
         known_p = ~np.isnan(normal_p)
         phasor_p = np.where(known_p, np.exp(1j * np.where(known_p, normal_p, 0.0)), 0.0).astype(np.complex64)
-        phasor = np.zeros(d2.size, dtype=np.complex64)
+        size = shape[0] * shape[1]
+        phasor = np.zeros(size, dtype=np.complex64)
         phasor[beside] = phasor_p[nearest]
-        normal = np.full(d2.size, np.nan)
-        normal[beside] = normal_p[nearest]
-        d2_near, phasor_near = d2[near], phasor[near]
+        d2_near, phasor_near = d2_within[is_near], phasor[near]
+        dx, dy = offset_x[near].astype(np.float32), offset_y[near].astype(np.float32)
         # point-to-plane: the offset along the nearest map point's normal (0 phasor: unknown), within reach
-        along = phasor_near.real * dx[near] + phasor_near.imag * dy[near]
+        along = phasor_near.real * dx + phasor_near.imag * dy
         along2 = along * along * np.float32(resolution**2)
         plane2 = np.where((phasor_near != 0) & (d2_near <= plane_reach**2), along2, d2_near)
-        fields = np.zeros((2, d2.size), dtype=np.float32)  # point, then plane field
+        fields = np.zeros((2, size), dtype=np.float32)  # point, then plane field
         # the point field of whole cells² by table (the same float32 products as d2's), the plane field in full
-        squares = cells2[near].astype(np.intp)
+        squares = whole2[near].astype(np.intp)
         table = _gaussian(np.arange(squares.max() + 1 if len(squares) else 1, dtype=np.float32)
                           * np.float32(resolution**2), sigma)
         fields[0, near], fields[1, near] = table[squares], _gaussian(plane2, sigma)
@@ -138,14 +145,15 @@ class LikelihoodGrid:
             inside = (u[:, 0] >= 0) & (u[:, 0] < shape[0]) & (u[:, 1] >= 0) & (u[:, 1] < shape[1])
             c = u[inside].astype(np.intp)  # non-negative: truncation is the floor
             flat = c[:, 0] * shape[1] + c[:, 1]
-            fields[:, flat[d2[flat] > (3 * sigma) ** 2]] = -free_penalty  # free, and far from every map point
+            far = whole2[flat].astype(np.float32) * np.float32(resolution**2) > (3 * sigma) ** 2
+            fields[:, flat[far]] = -free_penalty  # free, and far from every map point
         fields = fields.reshape(2, *shape)
         fields[:, [0, -1], :] = 0.0  # lookups beyond the grid clip to its border: keep it empty
         fields[:, :, [0, -1]] = 0.0
         observed = None if seen is None else _observed(seen, origin, resolution, shape)
         neutral = 0.0 if observed is None or not observed.any() else float(np.maximum(fields[0][observed], 0).mean())
-        grid = cls(fields[0], origin, resolution, normal.reshape(shape), normal_sigma, fields[1], phasor.reshape(shape),
-                   observed, neutral)
+        grid = cls(fields[0], origin, resolution, None, normal_sigma, fields[1], phasor.reshape(shape), observed,
+                   neutral, normal_cells=(beside, normal_p[nearest]))
         grid.__dict__["fields"] = fields  # the cached stack, already built
         return grid
 
@@ -163,6 +171,14 @@ class LikelihoodGrid:
     def normal_phasors(self) -> np.ndarray:
         """(NX, NY) e^{iψ} of each cell's nearest map normal, 0 where unknown."""
         return phasors(self.normals) if self.phasor is None else self.phasor
+
+    def normals_of_cells(self, cell: np.ndarray) -> np.ndarray:
+        """The world normal of the nearest map point (NaN: unknown) in flat cells (ix·NY + iy, within the grid)."""
+        if self.normal_cells is None:
+            return np.take(self.normals, cell)
+        held, normal = self.normal_cells
+        at = np.minimum(np.searchsorted(held, cell), len(held) - 1)
+        return np.where(held[at] == cell, normal[at], np.nan) if len(held) else np.full(np.shape(cell), np.nan)
 
     @cached_property
     def normal_known(self) -> np.ndarray:
@@ -220,7 +236,7 @@ class LikelihoodGrid:
         gy = ((v01 - v00) * (1 - fx) + (v11 - v10) * fx) / res
         cx = np.clip(np.floor((x - ox) / res).astype(np.intp), 0, nx - 1)  # the cell holding the point
         cy = np.clip(np.floor((y - oy) / res).astype(np.intp), 0, ny - 1)
-        return value, gx, gy, np.take(self.normals, cx * ny + cy)
+        return value, gx, gy, self.normals_of_cells(cx * ny + cy)
 
     def pyramid(self, levels: int) -> list[np.ndarray]:
         """Level 0: ``fields`` (2, NX, NY); level h ≥ 1: (1, NX, NY), the max over cells [i, i + 2^h) ×
