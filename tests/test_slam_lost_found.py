@@ -9,7 +9,7 @@ from radioslam.slam.config import SlamConfig
 from radioslam.slam.loop_closer import LoopCloser
 from radioslam.slam.lost_found import LostAndFound, Trial
 from radioslam.slam.posterior import Posterior
-from radioslam.slam.rivals import Rivals
+from radioslam.slam.rivals import Cause, Rivals
 from radioslam.slam.status import ScanStatus
 
 
@@ -142,3 +142,30 @@ def test_after_a_jump_each_scan_is_also_searched_for_where_the_terminal_was_take
     lost_and_found.alert, searched = 0, len(stub.followed)
     lost_and_found.observe(10, ScanStatus.MATCHED, ESTIMATES[10], 0.6, None, _before(10), stub)
     assert lost_and_found.trial is None and len(stub.followed) == searched
+
+
+class LookAlikeStub(MapStub):
+    """A room that looks the same from the place the whole-map search finds (a symmetric room)."""
+
+    def looks_alike(self, *args):
+        return True
+
+
+def test_a_look_alike_place_opens_no_trial_but_stays_the_endings_alternative(monkeypatch):
+    """A score drop whose whole-map search finds a place the room looks the same from cannot be weighed by the
+    scans (both places explain them alike): the front end's pose stays, and the place found is kept as an
+    alternative (its step from the pose before, the jump) that the ending weighs with the whole walk. Before,
+    it was dropped: a terminal carried to a look-alike place was silently lost."""
+    cfg = SlamConfig()
+    rivals = Rivals()
+    lost_and_found, stub = LostAndFound.from_config(cfg, Posterior.from_config(cfg, None), rivals), LookAlikeStub()
+    _walk(lost_and_found, stub, [0.6] * 8, 0.1, monkeypatch)
+    assert rivals.kept == []
+    _odds(monkeypatch, 1.0)
+    lost_and_found.observe(8, ScanStatus.MATCHED, ESTIMATES[8], 0.3, None, _before(8), stub)
+    assert lost_and_found.trial is None
+    (rival,) = rivals.kept
+    assert rival.key == 8 and rival.cause is Cause.LOOKALIKE
+    assert np.allclose(rival.step, [5.0, 0.0, 0.0])  # from pose 7 to the place found (5 m on)
+    (_, branch), = rivals.branches(np.array([ESTIMATES[k] for k in range(12)]))  # every later pose carried along
+    assert np.allclose(branch[8:, 0], np.arange(8, 12) + 4.0) and np.allclose(branch[:8, 0], np.arange(8))

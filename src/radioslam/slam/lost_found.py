@@ -9,7 +9,7 @@ scan by scan and weighed by its posterior odds (:mod:`radioslam.slam.posterior`)
    share spread over the area searched (with odometry, one the odometry does not show costs tens of
    nats), and the scans must pay for it. Unless the room looks the same from both places (the map
    around the front end's pose, carried to the place found, lands on walls again: a symmetric room, a
-   row of aisles);
+   row of aisles: the place found is then kept as an alternative for the ending, :mod:`radioslam.slam.rivals`);
 2. each following scan is searched for within one step of the latest place (every heading, as the front
    end searches its own local map), against the same map with the trial's scans added at their places (a
    front end led astray by them, a wrong turn, does not lead the trial astray);
@@ -187,6 +187,9 @@ class LostAndFound:
             return
         place = loop_closer.placed_pose(found, estimates)
         if loop_closer.looks_alike(compose(place, inverse(pose)), pose, keys, grid, estimates):
+            # no scan can tell the two places apart: the front end's stays, and the place found is kept for the
+            # ending to weigh with the whole walk (a terminal carried to a look-alike place is not silently lost)
+            self.rivals.keep_poses(k, estimates[k - 1], place[None], Cause.LOOKALIKE)
             return
         self._start(k, keys, pose, found, place, points, estimates, loop_closer, found.searched_m2,
                     self._front_placements(pose, points, grid, normals, loop_closer))
