@@ -90,7 +90,7 @@ def test_a_trial_that_never_gathers_enough_evidence_is_recorded_undecided(monkey
     probable there (0.1 nat each), never enough to reach the ending's odds in max_trial_scans: the trial
     ends and its scans are recorded as undecided (the driver marks them ambiguous). A trial whose scans the
     front end's poses explain better ends at once and is not recorded; a place where the scan is less
-    probable opens none."""
+    probable opens none. The undecided trial's jump stays an alternative for the ending to weigh."""
     cfg = SlamConfig()
     lc = cfg.loop_closure
     lost_and_found, stub = LostAndFound.from_config(cfg, Posterior.from_config(cfg, None), Rivals()), MapStub()
@@ -109,13 +109,16 @@ def test_a_trial_that_never_gathers_enough_evidence_is_recorded_undecided(monkey
     _walk(lost_and_found, stub, [0.6] * lc.max_trial_scans, 0.1, monkeypatch, start=10)
     assert lost_and_found.trial is None and not lost_and_found.decided()
     assert lost_and_found.undecided == [list(range(9, 9 + lc.max_trial_scans))]
+    # and the walk with its jump stays an alternative for the ending: the place found for its first scan
+    (rival,) = lost_and_found.rivals.kept
+    assert rival.key == 9 and rival.cause is Cause.PLACE_FOUND and np.allclose(rival.step, [5.0, 0.0, 0.0])
     # the front end explains the next trial's scans better: it ends, unrecorded
     lost_and_found.undecided.clear()
     _odds(monkeypatch, 1.0)
     lost_and_found.observe(30, ScanStatus.MATCHED, ESTIMATES[30], 0.2, None, _before(30), stub)
     assert lost_and_found.trial is not None
     _walk(lost_and_found, stub, [0.6] * 3, -2.0, monkeypatch, start=31)
-    assert lost_and_found.trial is None and lost_and_found.undecided == []
+    assert lost_and_found.trial is None and lost_and_found.undecided == [] and len(lost_and_found.rivals.kept) == 1
 
 
 def test_after_a_jump_each_scan_is_also_searched_for_where_the_terminal_was_taken(monkeypatch):
@@ -169,3 +172,29 @@ def test_a_look_alike_place_opens_no_trial_but_stays_the_endings_alternative(mon
     assert np.allclose(rival.step, [5.0, 0.0, 0.0])  # from pose 7 to the place found (5 m on)
     (_, branch), = rivals.branches(np.array([ESTIMATES[k] for k in range(12)]))  # every later pose carried along
     assert np.allclose(branch[8:, 0], np.arange(8, 12) + 4.0) and np.allclose(branch[:8, 0], np.arange(8))
+
+
+def test_a_relocalization_not_taken_on_odds_within_the_endings_stays_an_alternative(monkeypatch):
+    """A lost scan's place in the whole map is taken where its posterior beats the front end's pose; where it
+    falls short by less than the ending's odds (1 : odds), the decision was not the data's to make, and the place
+    stays an alternative the ending weighs with the whole walk; beyond those odds it is dropped. Taken, the front
+    end's pose is the one kept."""
+    from radioslam.slam.front_end import Step
+    from radioslam.slam.loop_closer import LoopClosure
+    from radioslam.slam.session import SlamSession
+
+    session = SlamSession()
+    session.back_end.estimates = {0: np.zeros(3), 1: np.array([0.5, 0.0, 0.0])}
+    place = LoopClosure(0, 2, np.array([4.0, 1.0, 0.5]), np.eye(3) * 1e-4, 0.8, relocalization=True)
+    monkeypatch.setattr(type(session.loop_closer), "relocalize", lambda self, *args, **kwargs: place)
+    bound = np.log(session.cfg.ending.odds)
+    lost = Step(np.array([1.0, 0.0, 0.0]), np.eye(3), ScanStatus.PREDICTED, 0.0)
+    for log_odds, kept in ((-0.5 * bound, Cause.PLACE_FOUND), (-2.0 * bound, None), (1.0, Cause.RELOCALIZATION)):
+        session.rivals.kept.clear()
+        session.lost = session.cfg.loop_closure.relocalize_after  # a lost stretch: relocalization searches
+        monkeypatch.setattr(SlamSession, "_relocation_log_odds", lambda self, *args, odds=log_odds: odds)
+        step, found = session._relocalized(2, lost, None)
+        assert [r.cause for r in session.rivals.kept] == ([] if kept is None else [kept])
+        assert bool(found) == (log_odds > 0)
+        if kept is Cause.PLACE_FOUND:  # the alternative is the place found, stepped from pose 1
+            assert np.allclose(session.rivals.kept[0].step, [3.5, 1.0, 0.5])

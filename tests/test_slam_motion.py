@@ -337,7 +337,9 @@ def test_an_ambiguous_trajectory_is_said_written_and_strict_about(demo_run, tmp_
     assert "ambiguous trajectory (--strict)" in done.stderr
     assert sum(line.startswith("radioslam: warning: ambiguous trajectory") for line in done.stderr.splitlines()) == 1
     doc = json.loads((run / "slam.json").read_text())
-    assert doc["ambiguous_trajectory"] is True and doc["alternative"]["source"] in ("odometry", "pose graph")
+    # the runner-up is whichever hypothesis is second (the config calls every one close)
+    assert doc["ambiguous_trajectory"] is True and doc["alternative"]["source"] in ("odometry", "pose graph",
+                                                                                   "rival branch")
     _, alternative = read_tum(run / "trajectory_alternative.tum")
     _, answer = read_tum(run / "trajectory.tum")
     assert alternative.shape == answer.shape and not np.allclose(alternative, answer)

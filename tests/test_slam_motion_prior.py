@@ -152,3 +152,19 @@ def test_a_scans_clear_line_across_a_mapped_wall_costs_one_observation():
     expected = TEMPERATURE * (point_terms(crossed, points, normals, weights, poses)
                               + line_log_likelihoods(crossed, sighting, poses, 0.3))
     assert total == pytest.approx(expected) and total[0] < TEMPERATURE * (LOG_FLOOR + 0.5)
+
+
+def test_a_jump_beyond_a_step_is_a_kidnap_far_rarer_than_a_sudden_turn():
+    """The unexpected is two events with their own shares: a slip or a sudden turn within a step's reach (ε,
+    uniform over the searched window) and the terminal carried beyond it (a kidnap: ε_J, uniform over the area
+    searched). Over an area as large as the window a jump is ε / ε_J times less probable than a surprise within
+    it (200 : 1 for an unknown platform): a fold onto a look-alike place far away pays for its jump, where one
+    share for both priced a teleport like a sudden turn. With no area given (the front end's own search) a step
+    beyond the window has only the Gaussians' tails."""
+    prior = MotionPrior.of(np.array([[0.5, 0.0, 0.0]]), UNKNOWN, max_step_m=1.3)
+    window = (2 * 1.3) ** 2
+    inside, beyond = prior.log_prob(np.array([[-1.2, 1.2, 2.0], [5.0, 5.0, 2.0]]), area_m2=window)
+    assert inside - beyond == pytest.approx(np.log(UNKNOWN.surprise / UNKNOWN.jump), abs=0.01)
+    assert np.log(UNKNOWN.surprise / UNKNOWN.jump) > np.log(20.0)  # beyond the ending's odds
+    assert prior.log_prob(np.array([[5.0, 5.0, 2.0]]))[0] < beyond - 50.0
+    assert all(0 < PLATFORMS[p].jump < PLATFORMS[p].surprise for p in PLATFORMS)

@@ -233,9 +233,10 @@ class PosteriorConfig(_Section):
     """The posterior of a scan's placement (:mod:`radioslam.slam.posterior`): relocalization, the trials and
     the ending weigh placements by it."""
 
-    # each scan is scored against the scans before it whose poses lie within radius_m (a radio scan's
-    # echoes reach a few metres to ten), at most max_scans of them, nearest first
+    # a rival branch's jump is aligned on the scans before its fork within radius_m of the scans after it
     radius_m: float = Field(5.0, gt=0, le=100.0)
+    # each scan is scored against the scans before it whose poses lie within its own reach (its farthest echo:
+    # any viewpoint that far may have seen the surfaces it sees), at most max_scans of them, nearest first
     max_scans: int = Field(30, ge=1, le=1000)
 
 

@@ -19,7 +19,7 @@ session 28). Two that agree (every pose within ``same_m`` and ``same_deg``) are 
 with the front end's measurement model (:mod:`radioslam.slam.measurement`: each specular arc one
 observation, unseen space at the prior of a surface, seen-through space contradicting, and so a scan's
 own clear lines across mapped walls) against the
-scans before k whose poses lie within ``radius_m`` of T_k (revisits included: a folded trajectory lays
+scans before k whose poses lie within scan k's reach of T_k (revisits included: a folded trajectory lays
 a corridor's scans over another's, where their echoes contradict each other), and the motion prior
 (:mod:`radioslam.slam.motion_prior`) of each step given the one before it and the odometry.
 
@@ -158,7 +158,7 @@ class Judge:
             answer_prior = self.posterior.trajectory_prior(answer.poses)
         motion = self.posterior.trajectory_prior(poses) - answer_prior
         keys = sorted(scans)
-        changed = [(i, k, around) for i, k, around, alike in self._judged(poses, keys, answer) if not alike]
+        changed = [(i, k, around) for i, k, around, alike in self._judged(poses, keys, answer, scans) if not alike]
         if not changed:
             return motion
         picked = np.unique(np.linspace(0, len(changed) - 1, min(self.screened_scans, len(changed))).astype(int))
@@ -233,13 +233,13 @@ class Judge:
             if (same := int(differ[0]) if len(differ) else len(poses)) > shared:
                 other, shared = candidate, same
         terms, near = [], []
-        for i, k, around, alike in self._judged(poses, keys, other):
+        for i, k, around, alike in self._judged(poses, keys, other, scans):
             terms.append(other.terms[i - 1] if alike else
                          self.posterior.scan_term(scans[k], poses[k], keys[:i], poses, scans, around))
             near.append(around)
         return Scored(poses, terms, near)
 
-    def _judged(self, poses: np.ndarray, keys: list[int], other: "Scored | None"):
+    def _judged(self, poses: np.ndarray, keys: list[int], other: "Scored | None", scans: dict[int, ScanPoints]):
         """Per scan but the first: (its index i in ``keys``, its key, the scans before it near it, whether it
         scores as on ``other``, a scored trajectory). A scan's term depends on its own pose and those of the
         scans it is judged against alone, and not on one rigid motion of them all: it is ``other``'s wherever
@@ -253,7 +253,7 @@ class Judge:
             if k < shared:
                 yield i, k, other.near[i - 1], True
                 continue
-            around = self.posterior.nearby(poses[k], keys[:i], poses)
+            around = self.posterior.nearby(poses[k], keys[:i], poses, scans[k].reach)
             yield i, k, around, other is not None and around == other.near[i - 1] and _one_motion(moves[[k] + around])
 
     def warning(self, best: Hypothesis, runner_up: Hypothesis, odds: float, status: list, odometry: bool) -> str:

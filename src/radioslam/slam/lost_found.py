@@ -246,6 +246,9 @@ class LostAndFound:
             # odds within the stated ones either way
             if len(trial.found) >= self.cfg.confirm_scans and trial.evidence >= 0.0 and trial.log_odds > -self.bound:
                 self.undecided.append([loop.key for loop in trial.found])
+                first = trial.found[0]  # the walk with the trial's jump: for the ending to weigh
+                self.rivals.keep_poses(first.key, estimates[first.key - 1],
+                                       LoopCloser.placed_pose(first, estimates)[None], Cause.PLACE_FOUND)
             self.trial = None
             return
         trial.found.append(loop_closer.placed(k, place, found_score, covariance, trial.keys, estimates))

@@ -3,14 +3,18 @@ fused with odometry when it is given.
 
 A step s = (x, y, θ) in the previous pose's frame has the density
 
-    p(s) = (1 − ε) · Σ_h w_h N(s; μ_h, Σ_h) + ε · U(s),
+    p(s) = (1 − ε − ε_J) · Σ_h w_h N(s; μ_h, Σ_h) + ε · U_W(s) + ε_J · U_A(s),
 
 a Gaussian mixture over what the platform does next (hypotheses h of :mod:`radioslam.slam.motion`:
 the odometry's step, the last step repeated, standing still, the last turn repeated on the spot) and
-a heavy-tailed share ε of the unexpected, uniform over every step the front end searches (any heading,
-a translation within ±``max_step_m`` in x and y: branch and bound's square window). A half turn in one
-step is thus always possible, never free: it costs log((1 − ε) N_peak / (ε U)) against a step the model
-expects (a robust prior in the sense of Olson & Agarwal's max-mixtures, RSS 2012).
+two heavy-tailed shares of the unexpected, each its own event: ε, a slip or a sudden turn, uniform over
+every step the front end searches (U_W: any heading, a translation within ±``max_step_m`` in x and y,
+branch and bound's square window), and ε_J, the terminal carried beyond that (a kidnap), uniform over the
+area a wider search covers (U_A: a relocalization's, the map's; none where no area is given). A half turn
+in one step is thus always possible, never free: it costs log((1 − ε − ε_J) N_peak / (ε U_W)) against a
+step the model expects (a robust prior in the sense of Olson & Agarwal's max-mixtures, RSS 2012); a jump
+to a look-alike place far away costs ε / ε_J more than a surprise within reach, which a fold onto mapped
+space must pay for with its scans.
 
 - Without odometry the Gaussians' widths are the platform's (:class:`Platform`): how much a step may
   differ from the last one.
@@ -47,7 +51,8 @@ class PlatformModel:
     along_m: float  # along the direction of travel (speeding up, slowing down)
     across_m: float  # sideways
     turn_rad: float  # the turn's change from the hypothesis' turn
-    surprise: float  # ε: the share of steps the Gaussians do not describe (a kidnap, a slip, a sudden turn)
+    surprise: float  # ε: the share of steps within a step's reach the Gaussians do not describe (slips, sudden turns)
+    jump: float  # the share of steps that carry the terminal beyond a step's reach (a kidnap)
 
 
 # widths per scan at walking pace (0.3–1 m a scan). A robot holds its course: its speed changes by a
@@ -57,11 +62,14 @@ class PlatformModel:
 # 30° turns on the spot and U-turns in one scan, 1–2 % of its steps turning more than 90°): half a metre
 # either way (a walk's direction may change by a right angle in one scan), 45° (a quarter turn costs 2
 # nats, e² ≈ 7 : 1, within the odds a scan can overturn), and 2 % of steps unexpected (a half turn: ≈ 7
-# nats).
+# nats). A kidnap (the terminal carried beyond a step) is rarer by orders of magnitude than a sudden turn for
+# every platform: one scan in 10⁴ (a robot's, driven, one in 10⁵), 200 : 1 against it beyond the sudden turn's
+# share, past the ending's odds, so that a jump's prior is not a turn's.
 PLATFORMS = {
-    Platform.ROBOT: PlatformModel(along_m=0.1, across_m=0.05, turn_rad=np.radians(15.0), surprise=1e-3),
-    Platform.HANDHELD: PlatformModel(along_m=0.25, across_m=0.15, turn_rad=np.radians(30.0), surprise=1e-2),
-    Platform.UNKNOWN: PlatformModel(along_m=0.5, across_m=0.5, turn_rad=np.radians(45.0), surprise=2e-2),
+    Platform.ROBOT: PlatformModel(along_m=0.1, across_m=0.05, turn_rad=np.radians(15.0), surprise=1e-3, jump=1e-5),
+    Platform.HANDHELD: PlatformModel(along_m=0.25, across_m=0.15, turn_rad=np.radians(30.0), surprise=1e-2,
+                                     jump=1e-4),
+    Platform.UNKNOWN: PlatformModel(along_m=0.5, across_m=0.5, turn_rad=np.radians(45.0), surprise=2e-2, jump=1e-4),
 }
 
 
@@ -75,6 +83,7 @@ class MotionPrior:
     weights: np.ndarray
     surprise: float
     max_step_m: float
+    jump: float = 0.0
 
     @classmethod
     def of(cls, hypotheses: np.ndarray, platform: PlatformModel, max_step_m: float,
@@ -96,7 +105,7 @@ class MotionPrior:
             means, sigmas = means.copy(), sigmas.copy()
             means[:, 2], sigmas[:, 2] = gyro[0], gyro[1]
         weights = np.full(len(means), 1.0 / len(means))
-        return cls(means, sigmas, weights, platform.surprise, max_step_m)
+        return cls(means, sigmas, weights, platform.surprise, max_step_m, platform.jump)
 
     def log_prob(self, steps: np.ndarray, area_m2: float | None = None) -> np.ndarray:
         """log p(s) (C,) of steps (C, 3) in the previous pose's frame (x forward, y left, θ); the unexpected share
@@ -117,6 +126,7 @@ class MotionPrior:
         peak = gauss.max(axis=1, keepdims=True)
         mixture = peak[:, 0] + np.log(np.sum(np.exp(gauss - peak), axis=1))
         inside = np.all(np.abs(steps[:, :2]) <= self.max_step_m, axis=1)  # the searched window
-        beyond = -np.inf if area_m2 is None else -np.log(max(area_m2, (2 * self.max_step_m) ** 2) * 2 * np.pi)
-        uniform = np.where(inside, -np.log((2 * self.max_step_m) ** 2 * 2 * np.pi), beyond)
-        return np.logaddexp(np.log1p(-self.surprise) + mixture, np.log(self.surprise) + uniform)
+        beyond = -np.inf if area_m2 is None else \
+            np.log(self.jump) - np.log(max(area_m2, (2 * self.max_step_m) ** 2) * 2 * np.pi)
+        unexpected = np.where(inside, np.log(self.surprise) - np.log((2 * self.max_step_m) ** 2 * 2 * np.pi), beyond)
+        return np.logaddexp(np.log1p(-self.surprise - self.jump) + mixture, unexpected)

@@ -6,7 +6,7 @@ and the honest ending compare as log odds,
                                                 + const,
 
 - the scan's term from :mod:`radioslam.slam.measurement` against the scans before it whose poses lie within
-  ``radius_m`` of T_k (at most ``max_scans``, nearest first: what a radio scan's echoes reach), with the
+  the scan's own reach of T_k (its farthest echo; at most ``max_scans``, nearest first), with the
   space they observed, so a pose in space the map never saw scores neutral, not zero;
 - the step's term from :mod:`radioslam.slam.motion_prior`: the platform's step (the odometry's at its noise
   when given), or the unexpected share ε of steps spread uniformly over the area searched. A relocalization
@@ -44,21 +44,24 @@ class Posterior:
     def from_config(cls, cfg, motion: MotionModel) -> "Posterior":
         return cls(cfg.grid, cfg.posterior.radius_m, cfg.posterior.max_scans, motion)
 
-    def nearby(self, pose: np.ndarray, earlier: list[int], poses) -> list[int]:
-        """The scans of ``earlier`` whose ``poses`` (indexable by key) lie within ``radius_m`` of ``pose``, at most
-        ``max_scans`` of them, nearest first; returned in key order."""
+    def nearby(self, pose: np.ndarray, earlier: list[int], poses, reach: float) -> list[int]:
+        """The scans of ``earlier`` whose ``poses`` (indexable by key) lie within ``reach`` of ``pose`` (the scan's
+        own: its farthest echo), at most ``max_scans`` of them, nearest first; returned in key order. A surface the
+        scan sees may have been seen from any viewpoint that far: a map cut shorter holds fewer of the scan's
+        surfaces where the walk explores than where it revisits, and a place folded onto a well-walked part of
+        the map would gain for that alone."""
         if not earlier:
             return []
         keys = np.asarray(earlier)
         distance = np.linalg.norm(np.array([poses[m][:2] for m in earlier]) - pose[:2], axis=1)
         order = np.argsort(distance, kind="stable")[: self.max_scans]
-        return sorted(keys[order[distance[order] <= self.radius_m]].tolist())
+        return sorted(keys[order[distance[order] <= reach]].tolist())
 
     def scan_term(self, points: ScanPoints, pose: np.ndarray, earlier: list[int], poses,
                   scans: dict[int, ScanPoints], near: list[int] | None = None) -> float:
         """log p(scan | ``pose``, the scans of ``earlier`` near it at ``poses``) (0 where none is near: no map,
         no evidence); ``near``: those scans, where already known (:meth:`nearby`)."""
-        near = self.nearby(pose, earlier, poses) if near is None else near
+        near = self.nearby(pose, earlier, poses, points.reach) if near is None else near
         if not near:
             return 0.0
         grid, _ = map_grid(near, {m: poses[m] for m in near}, scans, self.grid, observed=True)

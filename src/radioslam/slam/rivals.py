@@ -5,10 +5,11 @@ A decision places one scan: the front end's choice among turned poses the scan a
 ambiguous scan's turned rivals), its choice of a pose the motion did not expect (taken against the motion
 prior's odds beyond the ending's, the scan's own fit at the expected step left), a fork's decision for its
 rival (the branch it left), a relocalization (taken at odds above 1 : 1, the front end's own pose left), a
-lost-and-found trial's jump (confirmed at the ending's odds, the walk without the jump left) and a trial not opened
-because the room looks the same from the place found (no scan can weigh the two: the place found left). Each
-alternative
-is kept as its step into that scan from the pose before it; at the walk's end it is the answer's trajectory
+lost-and-found trial's jump (confirmed at the ending's odds, the walk without the jump left); and the decisions
+not taken on such odds: a relocalization whose posterior falls short of the front end's pose by less than the
+ending's odds, a trial that ends undecided, and a trial not opened because the room looks the same from the
+place found (no scan can weigh the two; the place each found left). Each alternative is kept as its step into
+that scan from the pose before it; at the walk's end it is the answer's trajectory
 with that step replaced and every later pose carried with it (a rigid branch, as in max-mixtures: Olson &
 Agarwal, RSS 2012, keep the alternatives and let the whole data weigh them), its step aligned by the scans
 after it (:meth:`radioslam.slam.ending.Judge.aligned`). The ending (:mod:`radioslam.slam.ending`) scores each
@@ -35,6 +36,7 @@ class Cause(str, Enum):
     RELOCALIZATION = "the front end's pose a relocalization replaced"
     JUMP = "the walk without a confirmed jump"
     LOOKALIKE = "a place the room looks the same from, which a score drop's search of the whole map found"
+    PLACE_FOUND = "a place the whole map's search found for the scan, not taken at odds within the ending's"
     EXPECTED = "the step the motion expected, where the scan placed itself against the motion's odds"
 
 

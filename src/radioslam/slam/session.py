@@ -152,7 +152,11 @@ class SlamSession:
                                                                                        loop_closer, step, points):
             suspect = False  # an open fork the map contradicts the choice of decides first (step 8)
         found = loop_closer.relocalize(k, points, back_end.estimates, k - self.lost) if suspect else None
-        if found is None or self._relocation_log_odds(k, found, step, points) <= 0.0:
+        odds = -np.inf if found is None else self._relocation_log_odds(k, found, step, points)
+        if odds <= 0.0:
+            if odds > -np.log(cfg.ending.odds):  # not taken, but on odds the ending must weigh
+                self.rivals.keep_poses(k, back_end.estimates[k - 1], back_end.relocalized_pose(found),
+                                       Cause.PLACE_FOUND)
             return step, []
         self.rivals.keep_poses(k, back_end.estimates[k - 1], step.pose, Cause.RELOCALIZATION)
         return self.front_end.relocalized(back_end.relocalized_pose(found), found.score), [found]
