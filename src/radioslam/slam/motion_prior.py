@@ -76,14 +76,15 @@ PLATFORMS = {
 @dataclass(frozen=True)
 class MotionPrior:
     """The step density for one scan: Gaussian components (means (H, 3), sds (H, 3), weights (H,)) in
-    the previous pose's frame, the unexpected's share and the searched disc's radius."""
+    the previous pose's frame, the unexpected's shares (within the searched window, and a kidnap's beyond it)
+    and the window's half width."""
 
     means: np.ndarray
     sigmas: np.ndarray
     weights: np.ndarray
     surprise: float
     max_step_m: float
-    jump: float = 0.0
+    jump: float  # the kidnap's share (beyond the window)
 
     @classmethod
     def of(cls, hypotheses: np.ndarray, platform: PlatformModel, max_step_m: float,

@@ -9,11 +9,11 @@ and the honest ending compare as log odds,
   the scan's own reach of T_k (its farthest echo; at most ``max_scans``, nearest first), with the
   space they observed, so a pose in space the map never saw scores neutral, not zero;
 - the step's term from :mod:`radioslam.slam.motion_prior`: the platform's step (the odometry's at its noise
-  when given), or the unexpected share ε of steps spread uniformly over the area searched. A relocalization
-  (a pose found anywhere within that area, :meth:`LoopCloser.relocalize`) is such a step: its prior is
-  ε / (area · 2π), which it must overcome by what the scan explains better there. Against odometry's step a
-  jump costs about 18–25 nats (the odometry's stated σ, the area searched), more than one scan's evidence
-  usually brings: a kidnap is confirmed by the scans after it (:mod:`radioslam.slam.lost_found`).
+  when given), or, beyond a step's reach, the kidnap's share ε_J of steps spread uniformly over the area
+  searched. A relocalization (a pose found anywhere within that area, :meth:`LoopCloser.relocalize`) is such a
+  step: its prior is ε_J / (area · 2π), which it must overcome by what the scan explains better there. Against
+  odometry's step a jump costs about 23–30 nats (the odometry's stated σ, the area searched), more than one
+  scan's evidence usually brings: a kidnap is confirmed by the scans after it (:mod:`radioslam.slam.lost_found`).
 
 Two placements of one scan (or two trajectories) compare by the difference of these: a likelihood ratio times
 a prior ratio, the posterior odds.
