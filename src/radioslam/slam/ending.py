@@ -109,17 +109,18 @@ class Judge:
     one, and the stated odds."""
 
     def __init__(self, posterior: Posterior, same_m: float, same_rad: float, odds: float, align_m: float,
-                 align_rad: float, screened_scans: int):
+                 align_rad: float, align_radius_m: float, screened_scans: int):
         self.posterior, self.same_m, self.same_rad, self.odds = posterior, same_m, same_rad, odds
-        self.align_m, self.align_rad, self.screened_scans = align_m, align_rad, screened_scans
+        self.align_m, self.align_rad, self.align_radius_m = align_m, align_rad, align_radius_m
+        self.screened_scans = screened_scans
 
     @classmethod
     def from_config(cls, cfg, posterior: Posterior) -> "Judge":
         """An alternative's step is aligned within the front end's distinct radius: the resolution at which its
-        fit was told from the pose taken."""
+        fit was told from the pose taken; on the scans before it within ``posterior.radius_m`` of those after."""
         e, f = cfg.ending, cfg.front_end
         return cls(posterior, e.same_m, np.radians(e.same_deg), e.odds, f.distinct_m, np.radians(f.distinct_deg),
-                   e.screened_scans)
+                   cfg.posterior.radius_m, e.screened_scans)
 
     def judge(self, candidates: list[tuple[Source, np.ndarray]], scans: dict[int, ScanPoints],
               known: list["Scored"] = ()) -> Ending:
@@ -186,17 +187,17 @@ class Judge:
 
     def aligned(self, key: int, poses: np.ndarray, scans: dict[int, ScanPoints]) -> np.ndarray:
         """A branch from scan ``key`` on with its jump refined: the scans from ``key`` on, one rigid body at the
-        branch's poses, fitted onto the map of the scans before ``key`` near them, within ``align_m`` and
-        ``align_rad`` (least squares on the likelihood field, :func:`radioslam.slam.refine.refine_poses`). A
-        decision's alternative step was fitted on the local map of its moment, a few degrees off at worst;
-        carried to the walk's end, such an error lays every later scan beside the walls it comes back to, and
-        the branch loses for its fit, not for its decision."""
+        branch's poses, fitted onto the map of the scans before ``key`` within ``align_radius_m`` of them, within
+        ``align_m`` and ``align_rad`` (least squares on the likelihood field,
+        :func:`radioslam.slam.refine.refine_poses`). A decision's alternative step was fitted on the local map of
+        its moment, a few degrees off at worst; carried to the walk's end, such an error lays every later scan
+        beside the walls it comes back to, and the branch loses for its fit, not for its decision."""
         keys = sorted(scans)
         before, after = [m for m in keys if m < key], [m for m in keys if m >= key]
         if not before or not after:
             return poses
         gap = np.linalg.norm(poses[before][:, None, :2] - poses[after][None, :, :2], axis=2).min(axis=1)
-        near = [m for m, d in zip(before, gap) if d <= self.posterior.radius_m]
+        near = [m for m, d in zip(before, gap) if d <= self.align_radius_m]
         if not near:
             return poses
         grid, _ = map_grid(near, {m: poses[m] for m in near}, scans, self.posterior.grid)

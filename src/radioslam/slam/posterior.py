@@ -35,14 +35,14 @@ KEEP = object()  # step_term's default: the motion model's own last step
 
 
 class Posterior:
-    """Built from the likelihood grid's settings, the reach of a scan's map and the walk's motion model."""
+    """Built from the likelihood grid's settings, the most scans a scan's map holds and the walk's motion model."""
 
-    def __init__(self, grid: GridConfig, radius_m: float, max_scans: int, motion: MotionModel):
-        self.grid, self.radius_m, self.max_scans, self.motion = grid, radius_m, max_scans, motion
+    def __init__(self, grid: GridConfig, max_scans: int, motion: MotionModel):
+        self.grid, self.max_scans, self.motion = grid, max_scans, motion
 
     @classmethod
     def from_config(cls, cfg, motion: MotionModel) -> "Posterior":
-        return cls(cfg.grid, cfg.posterior.radius_m, cfg.posterior.max_scans, motion)
+        return cls(cfg.grid, cfg.posterior.max_scans, motion)
 
     def nearby(self, pose: np.ndarray, earlier: list[int], poses, reach: float) -> list[int]:
         """The scans of ``earlier`` whose ``poses`` (indexable by key) lie within ``reach`` of ``pose`` (the scan's
