@@ -7,8 +7,9 @@ also ≤ a third of the odometry's own ATE), the **confident failures** (ATE > 0
 ``tracking_lost`` nor ``ambiguous_trajectory`` set), runs worse than the odometry they were given, ATE
 percentiles per family, scan-status counts, ms per scan (median, and the slowest tenth of a walk against
 its first tenth), loop closures that tie scans more than 4 m apart in truth, the pose graph against the
-front end, and a side-by-side front-end table against the ``peers`` extra (kiss-icp, small-gicp) on the
-same scans.
+front end, the front end's wrong steps (a step off the true one by more than 0.15 m or 5°: a steadier measure
+of the per-scan decisions than success, which one wrong step in a hundred decides), and a side-by-side
+front-end table against the ``peers`` extra (kiss-icp, small-gicp) on the same scans.
 
     python benchmarks/bench_robustness.py [--quick] [--seed 0] [--family office] [--only NAME]
                                           [--jobs 2] [--cache DIR] [--no-peers] [--perturb-m 1e-6]
@@ -45,10 +46,14 @@ from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import RANDOM_STREAM_VERSION, Simulator
 from radioslam.sim.odometry import per_step_sigmas
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, load_slam_config
+from radioslam.slam.se2 import between, wrap_angle
 
 FIELDS = ("range_m", "angle_rad", "power_db", "beam", "orientation")
 FAR_LOOP_M = 4.0  # a loop closure tying scans farther apart than this in truth is wrong
 STEADY_M = 0.01  # the stability check: a run whose ATE moves by no more than this under 1 µm range moves
+# a front-end step off the true step by more than this is a wrong decision: 3× the step's floor σ (2 cm, 0.3°) is
+# far below it, and a door's width or a turn's wrong twin far above it
+WRONG_STEP_M, WRONG_STEP_DEG = 0.15, 5.0
 
 
 def cache_file(scene: Scene, seed: int, cache: Path) -> Path:
@@ -103,7 +108,7 @@ def run_case(case: BenchCase, cache: Path, peers: bool = True, perturb_m: float 
     ate, odometry_ate = ate_rmse(result.poses, truth), case.odometry_ate()
     return {"case": case.name, "family": case.family, "room": case.room, "motion": case.motion,
             "snr_db": case.snr_db, "poses": len(scans), "ate_m": ate,
-            "ate_front_end_m": ate_rmse(result.odometry, truth),
+            "ate_front_end_m": ate_rmse(result.odometry, truth), "wrong_steps": wrong_steps(result.odometry, truth),
             "odometry_given": odometry is not None, "ate_given_odometry_m": odometry_ate,
             "success": case.succeeded(ate, odometry_ate), "loops": len(result.loop_closures),
             "far_loops": far_loops, "tracking_lost": bool(result.tracking_lost),
@@ -112,6 +117,14 @@ def run_case(case: BenchCase, cache: Path, peers: bool = True, perturb_m: float 
             "ms_per_scan": float(np.median(ms)), "slowest_tenth_ratio": float(max(tenths) / tenths[0]),
             "seconds": seconds, "status": result.status_counts(),
             "peers": peer_front_ends(scans, truth) if peers else {"kiss-icp": "skipped", "small-gicp": "skipped"}}
+
+
+def wrong_steps(front_end: np.ndarray, truth: np.ndarray) -> int:
+    """How many of the front end's steps (between consecutive poses of its chain) are off the true step by more
+    than ``WRONG_STEP_M`` or ``WRONG_STEP_DEG``."""
+    error = between(between(truth[:-1], truth[1:]), between(front_end[:-1], front_end[1:]))
+    return int(np.sum((np.hypot(error[:, 0], error[:, 1]) > WRONG_STEP_M) |
+                      (np.abs(np.degrees(wrap_angle(error[:, 2]))) > WRONG_STEP_DEG)))
 
 
 def flagged(row: dict) -> bool:
@@ -172,8 +185,8 @@ def _small_gicp(clouds: list[np.ndarray], truth: np.ndarray) -> dict:
 def table(rows: list[dict]) -> str:
     statuses = [s.value for s in ScanStatus]
     head = f"{'case':40} {'snr':>4} {'poses':>5} {'ATE m':>7} {'front':>7} {'odo in':>7} {'ok':>3} {'flag':>4} " \
-           f"{'loops':>5} {'far':>3} {'ms':>6} {'×1st':>5}  " + " ".join(f"{s[:5]:>5}" for s in statuses) + \
-           f"  {'kiss-icp':>8} {'gicp':>8}"
+           f"{'loops':>5} {'far':>3} {'wrong':>5} {'ms':>6} {'×1st':>5}  " + \
+           " ".join(f"{s[:5]:>5}" for s in statuses) + f"  {'kiss-icp':>8} {'gicp':>8}"
     lines = [head]
     for r in rows:
         if "crashed" in r:
@@ -185,7 +198,7 @@ def table(rows: list[dict]) -> str:
         flag = ("L" if r["tracking_lost"] else "") + ("A" if r["ambiguous_trajectory"] else "")
         lines.append(f"{r['case']:40} {r['snr_db']:4.0f} {r['poses']:5d} {r['ate_m']:7.3f} {r['ate_front_end_m']:7.3f} "
                      f"{'' if given is None else f'{given:.3f}':>7} {'y' if r['success'] else 'n':>3} {flag or '-':>4} "
-                     f"{r['loops']:5d} {len(r['far_loops']):3d} {r['ms_per_scan']:6.1f} "
+                     f"{r['loops']:5d} {len(r['far_loops']):3d} {r.get('wrong_steps', -1):5d} {r['ms_per_scan']:6.1f} "
                      f"{r['slowest_tenth_ratio']:5.1f}  "
                      + " ".join(f"{r['status'][s]:5d}" for s in statuses)
                      + f"  {peers[0]:8.3f} {peers[1]:8.3f}")
@@ -209,7 +222,8 @@ def summary(rows: list[dict]) -> str:
         lines.append(f"  {family:9} {sum(r['success'] for r in sub):3d}/{len(sub):<3d} "
                      f"ATE p50 {np.percentile(ate, 50):.3f} p90 {np.percentile(ate, 90):.3f} max {ate.max():.3f} m; "
                      "ms/scan median "
-                     f"{np.median([r['ms_per_scan'] for r in sub]):.1f}")
+                     f"{np.median([r['ms_per_scan'] for r in sub]):.1f}; front end's wrong steps "
+                     f"{sum(r.get('wrong_steps', 0) for r in sub)}/{sum(r['poses'] - 1 for r in sub)}")
     given = [r for r in ran if r["odometry_given"]]
     if given:
         worse = [r["case"] for r in given if r["ate_m"] > r["ate_given_odometry_m"] + 1e-6]  # beyond rounding
