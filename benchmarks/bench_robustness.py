@@ -38,7 +38,7 @@ import numpy as np
 from bench_stability import PERTURBATION_M, perturbed
 from suites import BUILDING_SUCCESS_M, CONFIDENT_M, ROOM_SUCCESS_M, BenchCase, benchmark_suite
 
-from radioslam.eval.trajectory_metrics import ate_rmse
+from radioslam.eval.trajectory_metrics import ate_rmse, relative_errors
 from radioslam.pipeline import calibrated_receiver
 from radioslam.scene import Scene, scene_to_yaml
 from radioslam.sensing import SensingConfig
@@ -46,7 +46,7 @@ from radioslam.sensing.pointcloud import Scan
 from radioslam.sim import RANDOM_STREAM_VERSION, Simulator
 from radioslam.sim.odometry import per_step_sigmas
 from radioslam.slam import RadioSlam, ScanStatus, SlamConfig, load_slam_config
-from radioslam.slam.se2 import between, wrap_angle
+from radioslam.slam.se2 import wrap_angle
 
 FIELDS = ("range_m", "angle_rad", "power_db", "beam", "orientation")
 FAR_LOOP_M = 4.0  # a loop closure tying scans farther apart than this in truth is wrong
@@ -122,7 +122,7 @@ def run_case(case: BenchCase, cache: Path, peers: bool = True, perturb_m: float 
 def wrong_steps(front_end: np.ndarray, truth: np.ndarray) -> int:
     """How many of the front end's steps (between consecutive poses of its chain) are off the true step by more
     than ``WRONG_STEP_M`` or ``WRONG_STEP_DEG``."""
-    error = between(between(truth[:-1], truth[1:]), between(front_end[:-1], front_end[1:]))
+    error = relative_errors(front_end, truth)
     return int(np.sum((np.hypot(error[:, 0], error[:, 1]) > WRONG_STEP_M) |
                       (np.abs(np.degrees(wrap_angle(error[:, 2]))) > WRONG_STEP_DEG)))
 
@@ -198,7 +198,7 @@ def table(rows: list[dict]) -> str:
         flag = ("L" if r["tracking_lost"] else "") + ("A" if r["ambiguous_trajectory"] else "")
         lines.append(f"{r['case']:40} {r['snr_db']:4.0f} {r['poses']:5d} {r['ate_m']:7.3f} {r['ate_front_end_m']:7.3f} "
                      f"{'' if given is None else f'{given:.3f}':>7} {'y' if r['success'] else 'n':>3} {flag or '-':>4} "
-                     f"{r['loops']:5d} {len(r['far_loops']):3d} {r.get('wrong_steps', -1):5d} {r['ms_per_scan']:6.1f} "
+                     f"{r['loops']:5d} {len(r['far_loops']):3d} {r['wrong_steps']:5d} {r['ms_per_scan']:6.1f} "
                      f"{r['slowest_tenth_ratio']:5.1f}  "
                      + " ".join(f"{r['status'][s]:5d}" for s in statuses)
                      + f"  {peers[0]:8.3f} {peers[1]:8.3f}")
@@ -223,7 +223,7 @@ def summary(rows: list[dict]) -> str:
                      f"ATE p50 {np.percentile(ate, 50):.3f} p90 {np.percentile(ate, 90):.3f} max {ate.max():.3f} m; "
                      "ms/scan median "
                      f"{np.median([r['ms_per_scan'] for r in sub]):.1f}; front end's wrong steps "
-                     f"{sum(r.get('wrong_steps', 0) for r in sub)}/{sum(r['poses'] - 1 for r in sub)}")
+                     f"{sum(r['wrong_steps'] for r in sub)}/{sum(r['poses'] - 1 for r in sub)}")
     given = [r for r in ran if r["odometry_given"]]
     if given:
         worse = [r["case"] for r in given if r["ate_m"] > r["ate_given_odometry_m"] + 1e-6]  # beyond rounding

@@ -38,9 +38,13 @@ def ate_rmse(estimate: np.ndarray, truth: np.ndarray) -> float:
     return float(np.sqrt(np.mean(pose_errors(estimate, truth) ** 2)))
 
 
+def relative_errors(estimate: np.ndarray, truth: np.ndarray, delta: int = 1) -> np.ndarray:
+    """Each relative pose error (P − delta, 3) over ``delta`` steps: the estimated step seen from the true
+    one (the RPE's terms)."""
+    return between(between(truth[:-delta], truth[delta:]), between(estimate[:-delta], estimate[delta:]))
+
+
 def rpe_rmse(estimate: np.ndarray, truth: np.ndarray, delta: int = 1) -> float:
     """Relative pose error over ``delta`` steps: RMSE of the translation error (m)."""
-    est_rel = between(estimate[:-delta], estimate[delta:])
-    true_rel = between(truth[:-delta], truth[delta:])
-    error = between(true_rel, est_rel)
+    error = relative_errors(estimate, truth, delta)
     return float(np.sqrt(np.mean(np.sum(error[:, :2] ** 2, axis=1))))
