@@ -163,3 +163,22 @@ def test_a_grid_as_wide_as_its_field_reaches_scores_every_placement_as_a_wider_o
     assert np.allclose(shift, np.round(shift), atol=1e-9)  # one lattice
     assert np.array_equal(lookup(tight), lookup(wide))
     assert np.count_nonzero(lookup(tight) > 0.1) > 500 and np.all(lookup(tight)[-2:] == -1.0)  # it tests the field
+
+
+def test_a_turned_rival_at_the_predicted_place_does_not_stand_in_for_the_predictions_fit():
+    """The prediction's own fit joins a turned choice's rivals unless a rival is the same hypothesis: near it
+    in position *and* heading. A rival half turned at the predicted position is another hypothesis (a
+    corridor scan's twin), so the fit must still be kept for the map to decide between them."""
+    from radioslam.slam import SlamConfig
+    from radioslam.slam.front_end import FrontEnd
+
+    cfg = SlamConfig()
+    front_end = FrontEnd.from_config(cfg)
+    fitted = np.array([1.04, -0.06, 0.0])
+    half_turned = np.array([[1.02, 0.02, np.pi]])
+    kept = front_end._with_prediction_fit(half_turned, fitted)
+    assert len(kept) == 2 and np.allclose(kept[-1], fitted)
+    step = np.radians(cfg.front_end.distinct_deg) / 2  # the same hypothesis: within distinct_m and distinct_deg
+    same = np.array([[1.04 + cfg.front_end.distinct_m / 2, -0.06, step]])
+    assert np.array_equal(front_end._with_prediction_fit(same, fitted), same)
+    assert len(front_end._with_prediction_fit(np.zeros((0, 3)), fitted)) == 1

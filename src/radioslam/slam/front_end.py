@@ -282,8 +282,9 @@ class FrontEnd:
 
     def _with_prediction_fit(self, rivals: np.ndarray, fitted: np.ndarray) -> np.ndarray:
         """``rivals`` (R, 3) and the scan's own fit near the motion's prediction (:meth:`_prediction_fit`),
-        unless a rival lies within ``distinct_m`` of it already."""
-        if len(rivals) and np.min(np.linalg.norm(rivals[:, :2] - fitted[:2], axis=1)) <= self.cfg.distinct_m:
+        unless a rival is that hypothesis already (within ``distinct_m`` and ``distinct_deg`` of it: a rival
+        at the same place turned the other way is another hypothesis)."""
+        if any(not self._apart(rival, fitted) for rival in rivals):
             return rivals
         return np.vstack([rivals, fitted])
 
