@@ -62,11 +62,12 @@ from scipy.special import betainc
 
 from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.config import LoopClosureConfig
-from radioslam.slam.correlative import candidate_likelihoods, correlative_match
+from radioslam.slam.correlative import candidate_likelihoods
 from radioslam.slam.front_end import Step
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
 from radioslam.slam.rivals import Cause, Rivals
+from radioslam.slam.scan_matcher import ScanMatcher, loop_matcher
 from radioslam.slam.scan_points import ScanPoints, fused_points
 from radioslam.slam.se2 import between, compose, inverse, wrap_angle
 from radioslam.slam.status import ScanStatus
@@ -121,19 +122,17 @@ class Decision:
 class Forks:
     """Remembers forks and tests their rivals; ``observe`` once per scan, after its loops."""
 
-    def __init__(self, cfg: LoopClosureConfig, turn_rad: float, levels: int, angle_step: float, rivals: Rivals):
-        self.cfg, self.turn_rad = cfg, turn_rad  # rivals turned at least this much from the choice fork
+    def __init__(self, cfg: LoopClosureConfig, matcher: ScanMatcher, rivals: Rivals):
+        self.cfg, self.matcher = cfg, matcher  # the loop closer's: a branch is placed and matched as a loop is
+        self.turn_rad = matcher.options.distinct_rad  # rivals turned at least this much from the choice fork
         self.rivals = rivals  # where every turned rival is kept for the ending, whether a fork opens or not
-        self.angle_step = angle_step  # of the match that places a branch
-        self.levels = levels  # branch-and-bound levels of each fork's matcher
         self.open: list[Fork] = []
         self.chosen_scores: dict[int, float] = {}  # per fork: the chosen branch's best match score since it
         self.rival_loops: dict[tuple, LoopClosure] = {}  # per rival branch: its best loop since the fork
 
     @classmethod
     def from_config(cls, cfg, rivals: Rivals) -> "Forks":
-        return cls(cfg.loop_closure, np.radians(cfg.front_end.distinct_deg), cfg.grid.branch_levels,
-                   np.radians(cfg.front_end.angle_step_deg), rivals)
+        return cls(cfg.loop_closure, loop_matcher(cfg), rivals)
 
     def turned(self, step: Step) -> np.ndarray:
         """(R, 3) the rivals of ``step`` turned at least ``turn_rad`` from its pose: those a fork remembers."""
@@ -163,7 +162,7 @@ class Forks:
                          for f in self.open]
             del self.open[contested.index(False) if False in contested else -1]
         self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned]),
-                              loop_closer.whole_map(keys, estimates)[0], tuple(keys), self.levels))
+                              loop_closer.whole_map(keys, estimates)[0], tuple(keys), self.matcher.options.levels))
 
     @staticmethod
     def _on_free(fork: Fork, k: int, estimates: dict[int, np.ndarray], scans: dict[int, ScanPoints],
@@ -210,8 +209,8 @@ class Forks:
             return jump
         carried = {m: compose(jump, estimates[m]) for m in keys}
         xy, normals = fused_points(keys, carried, scans, carried[k])
-        match = correlative_match(fork.grid, xy, normals, carried[k], self.cfg.fork_place_m,
-                                  np.radians(self.cfg.fork_place_deg), self.angle_step)
+        match = self.matcher.response(fork.grid, xy, normals, carried[k], self.cfg.fork_place_m,
+                                      np.radians(self.cfg.fork_place_deg))
         return compose(match.pose, inverse(estimates[k]))
 
     def _chosen_on_free(self, fork: Fork, k: int, estimates: dict[int, np.ndarray],

@@ -24,14 +24,13 @@ from functools import cache, partial
 
 import numpy as np
 
-from radioslam.slam.branch_bound import BranchAndBound, distinct
+from radioslam.slam.branch_bound import distinct
 from radioslam.slam.config import FrontEndConfig, GridConfig, MotionConfig, ScanConfig
-from radioslam.slam.correlative import candidate_likelihoods, correlative_match
-from radioslam.slam.degeneracy import DegeneracyTest, remap
+from radioslam.slam.correlative import candidate_likelihoods
+from radioslam.slam.degeneracy import remap
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.motion import Hypothesis, MotionHypothesis, MotionModel, jump_covariance
-from radioslam.slam.refine import fit_scores, refine_poses
-from radioslam.slam.rotation_search import HeadingSearch
+from radioslam.slam.scan_matcher import ScanMatcher, front_end_matcher
 from radioslam.slam.scan_points import ScanPoints, map_grid
 from radioslam.slam.se2 import between, pose_covariance, wrap_angle
 from radioslam.slam.status import ScanStatus
@@ -94,12 +93,10 @@ class FrontEnd:
     """Built from plain settings by :meth:`from_config`; ``register`` then ``update`` per scan."""
 
     def __init__(self, grid: GridConfig, scan: ScanConfig, cfg: FrontEndConfig, motion_cfg: MotionConfig,
-                 motion: MotionModel, degeneracy: DegeneracyTest):
+                 motion: MotionModel, matcher: ScanMatcher):
         self.grid_cfg, self.scan_cfg, self.cfg, self.motion_cfg, self.motion = grid, scan, cfg, motion_cfg, motion
-        self.degeneracy = degeneracy
-        self.step_rad = np.radians(cfg.angle_step_deg)
-        self.heading_search = HeadingSearch.from_config(cfg)
-        self.floor = pose_covariance(cfg.floor_sigma_m, cfg.floor_sigma_deg)
+        self.matcher, self.degeneracy = matcher, matcher.degeneracy
+        self.step_rad = matcher.options.angle_step_rad
         self.predicted = pose_covariance(motion_cfg.predicted_sigma_m, motion_cfg.predicted_sigma_deg)
         self.jump = jump_covariance(motion_cfg)  # a relocalized scan's step: the relocalization fixes the pose
         self.keys: list[int] = []  # scans of the local map, oldest first
@@ -108,7 +105,7 @@ class FrontEnd:
     @classmethod
     def from_config(cls, cfg, odometry: np.ndarray | None = None) -> "FrontEnd":
         motion = MotionModel.from_config(cfg.motion, odometry)
-        return cls(cfg.grid, cfg.scan, cfg.front_end, cfg.motion, motion, DegeneracyTest.from_config(cfg))
+        return cls(cfg.grid, cfg.scan, cfg.front_end, cfg.motion, motion, front_end_matcher(cfg))
 
     def register(self, k: int, points: ScanPoints, estimates: dict[int, np.ndarray]) -> Step:
         """Scan k's pose; ``estimates`` holds every earlier pose (the latest solution)."""
@@ -131,8 +128,8 @@ class FrontEnd:
         # every heading the scan's normals or the motion suggest over every translation within a step, or with
         # full odometry its step's Gaussian core
         centre, window, headings = self._search_region(phi, map_normals, hypotheses, last)
-        found = BranchAndBound(grid, self.grid_cfg.branch_levels).search(
-            xy, phi, centre, headings, window, 0.0,
+        found = self.matcher.search(
+            grid, xy, phi, centre, headings, window, 0.0,
             1.0 - cfg.ambiguity_margin - cfg.lattice_allowance, lambda poses: self._prior_discount(poses, hypotheses),
             np.array([h.pose for h in hypotheses]))
         if found.pose is None:
@@ -140,8 +137,8 @@ class FrontEnd:
         candidates = self._contenders(found.candidates, found.scores, found.judged)
         # each candidate refined off the lattice and scored on the interpolated field: a pose between
         # cells must not lose to one that happens to sit on the lattice
-        candidates = refine_poses(grid, xy, phi, candidates, self.grid_cfg.resolution_m, self.step_rad)
-        scores = fit_scores(grid, xy, phi, candidates)
+        candidates = self.matcher.refine(grid, xy, phi, candidates)
+        scores = self.matcher.scores(grid, xy, phi, candidates)
         discount = self._prior_discount(candidates, hypotheses)
         # the motion decides what the scan cannot tell apart, and no more
         chosen, close = choose(candidates, scores, discount, cfg.ambiguity_margin, np.radians(cfg.distinct_deg),
@@ -157,13 +154,12 @@ class FrontEnd:
         pose, score = candidates[chosen], float(scores[chosen])
         contradicted = float(np.mean(candidate_likelihoods(grid, xy, phi, pose, np.zeros(1), np.zeros(1, int)) < 0))
         # the response surface around it gives the covariance (Olson 2009 §IV)
-        match = correlative_match(grid, xy, phi, pose, cfg.window_m, np.radians(cfg.window_deg), self.step_rad)
-        cov = match.covariance + self.floor
+        cov = self.matcher.response(grid, xy, phi, pose).covariance + self.matcher.floor
         weight = float(np.clip((score - cfg.min_match_score) / cfg.trust_ramp, 0.0, 1.0))
         if weight == 0.0:
             return Step(primary, self.predicted, ScanStatus.PREDICTED, score,
                         note=f"match score {score:.2f} < {cfg.min_match_score:.2f}", contradicted=contradicted)
-        weak = self.degeneracy.matched_weak(grid, pose, xy, phi, cov)
+        weak = self.matcher.weak(grid, pose, xy, phi, cov)
         if weak is not None:  # candidates that only slide along the weak direction are not rivals
             rivals, undecided = (self._across(r, pose, weak) for r in (rivals, undecided))
         status, note = ScanStatus.MATCHED, ""
@@ -239,7 +235,7 @@ class FrontEnd:
             reach = ODOMETRY_CORE_SIGMAS * self.motion.odometry_sigmas
             turns = np.arange(-reach[2], reach[2] + 1e-12, self.step_rad)
             return primary.pose[:2], float(reach[0]), wrap_angle(primary.pose[2] + turns)
-        headings = self.heading_search.headings(phi, map_normals, [h.pose[2] for h in hypotheses])
+        headings = self.matcher.headings(phi, map_normals, [h.pose[2] for h in hypotheses])
         return last[:2], self.motion_cfg.max_step_m, headings
 
     def _settle(self, k: int, last: np.ndarray, grid: LikelihoodGrid, pose: np.ndarray, cov: np.ndarray,
@@ -247,15 +243,14 @@ class FrontEnd:
         """A degenerate match slid along its weak direction to the slide the walls facing along it and the
         motion's prior of scan k's step from ``last`` make most probable (:meth:`DegeneracyTest.settled`),
         with the covariance there, when it is no longer degenerate there; else the match as it was."""
-        cfg, xy, phi = self.cfg, points.xy, points.normals
+        xy, phi = points.xy, points.normals
         settled = self.degeneracy.settled(grid, pose, xy, phi, points.observation_weights, weak,
                                           self.motion_cfg.max_step_m, partial(self.motion.log_prob, k, last))
         if settled is None:
             return pose, cov, weak, ""
-        settled = refine_poses(grid, xy, phi, settled, self.grid_cfg.resolution_m, self.step_rad)[0]
-        match = correlative_match(grid, xy, phi, settled, cfg.window_m, np.radians(cfg.window_deg), self.step_rad)
-        settled_cov = match.covariance + self.floor
-        if self.degeneracy.matched_weak(grid, settled, xy, phi, settled_cov) is not None:
+        settled = self.matcher.refine(grid, xy, phi, settled)[0]
+        settled_cov = self.matcher.response(grid, xy, phi, settled).covariance + self.matcher.floor
+        if self.matcher.weak(grid, settled, xy, phi, settled_cov) is not None:
             return pose, cov, weak, ""
         dx, dy = settled[:2] - pose[:2]
         note = (f"moved {np.hypot(dx, dy):.2f} m toward {np.degrees(np.arctan2(dy, dx)):.0f}° by the walls facing "
@@ -269,15 +264,14 @@ class FrontEnd:
         of them (their own score beyond the ambiguity margin of theirs) whose discounted score is within
         the margin of the best: a turn seen in the scan, which ``choose`` takes whatever its discount. A
         U-turn ranked fifth by discounted score (hall-random-13, ranges moved by 1 µm) was never seen."""
-        cfg = self.cfg
-        radius_m, radius_rad, count = cfg.distinct_m, np.radians(cfg.distinct_deg), cfg.refined_candidates
-        by_motion, motion_scores = distinct(candidates, scores, radius_m, radius_rad, count)
+        cfg, o = self.cfg, self.matcher.options
+        by_motion, motion_scores = self.matcher.distinct(candidates, scores)
         seen = (scores * (1.0 - cfg.ambiguity_margin) > motion_scores.max()) & \
             (adjusted >= (1.0 - cfg.ambiguity_margin) * adjusted.max())
         order = np.flatnonzero(seen)[np.argsort(-scores[seen], kind="stable")]
-        by_scan, _ = distinct(candidates[order], scores[order], radius_m, radius_rad, count)
+        by_scan, _ = self.matcher.distinct(candidates[order], scores[order])
         both = np.concatenate([by_motion, by_scan])
-        merged, _ = distinct(both, np.zeros(len(both)), radius_m, radius_rad, 2 * count)
+        merged, _ = distinct(both, np.zeros(len(both)), o.distinct_m, o.distinct_rad, 2 * o.refined)
         return merged
 
     def _with_prediction_fit(self, rivals: np.ndarray, fitted: np.ndarray) -> np.ndarray:
@@ -290,8 +284,7 @@ class FrontEnd:
 
     def _prediction_fit(self, grid: LikelihoodGrid, xy: np.ndarray, phi: np.ndarray, primary: np.ndarray) -> np.ndarray:
         """The scan's best fit (3,) within ``distinct_m`` of the motion's prediction ``primary``."""
-        return correlative_match(grid, xy, phi, primary, self.cfg.distinct_m, np.radians(self.cfg.window_deg),
-                                 self.step_rad).pose
+        return self.matcher.response(grid, xy, phi, primary, self.cfg.distinct_m).pose
 
     def _across(self, rivals: np.ndarray, pose: np.ndarray, weak: np.ndarray) -> np.ndarray:
         """The rivals that differ from ``pose`` other than by sliding along the weak direction."""

@@ -34,16 +34,14 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from radioslam.slam.branch_bound import BranchAndBound, distinct
-from radioslam.slam.config import FrontEndConfig, GridConfig, LoopClosureConfig
-from radioslam.slam.correlative import correlative_match
-from radioslam.slam.degeneracy import DegeneracyTest
+from radioslam.slam.branch_bound import BranchAndBound
+from radioslam.slam.config import GridConfig, LoopClosureConfig
 from radioslam.slam.grid import LikelihoodGrid
 from radioslam.slam.pose_graph import local_covariance
-from radioslam.slam.refine import fit_score, refine_pose
-from radioslam.slam.rotation_search import HeadingSearch
+from radioslam.slam.refine import fit_score
+from radioslam.slam.scan_matcher import ScanMatcher, loop_matcher, relocalization_matcher
 from radioslam.slam.scan_points import ScanPoints, fused_free, fused_points
-from radioslam.slam.se2 import between, compose, pose_covariance, wrap_angle
+from radioslam.slam.se2 import between, compose, wrap_angle
 from radioslam.slam.submap import Submap
 
 
@@ -75,8 +73,8 @@ def smooth_step(x: float) -> float:
 class LoopCloser:
     grid_cfg: GridConfig
     cfg: LoopClosureConfig
-    front_cfg: FrontEndConfig
-    degeneracy: DegeneracyTest
+    matcher: ScanMatcher  # a loop's, within its window of the pose the graph predicts
+    relocalizer: ScanMatcher  # relocalization's, over the whole map
     submaps: list[Submap] = field(default_factory=list)
     points: dict[int, ScanPoints] = field(default_factory=dict)
     matchers: dict[int, tuple[np.ndarray, BranchAndBound]] = field(default_factory=dict)  # anchor → (its scans'
@@ -85,12 +83,12 @@ class LoopCloser:
 
     @property
     def floor(self) -> np.ndarray:
-        """The front end's covariance floor: a loop's response surface is as over-confident."""
-        return pose_covariance(self.front_cfg.floor_sigma_m, self.front_cfg.floor_sigma_deg)
+        """The covariance floor: a loop's response surface is as over-confident as the front end's."""
+        return self.matcher.floor
 
     @classmethod
     def from_config(cls, cfg) -> "LoopCloser":
-        return cls(cfg.grid, cfg.loop_closure, cfg.front_end, DegeneracyTest.from_config(cfg))
+        return cls(cfg.grid, cfg.loop_closure, loop_matcher(cfg), relocalization_matcher(cfg))
 
     def add(self, k: int, points: ScanPoints) -> None:
         """Scan k joins the current submap (a new one every ``submap_scans`` scans)."""
@@ -111,7 +109,7 @@ class LoopCloser:
         relative = np.array([between(estimates[submap.anchor], estimates[m]) for m in submap.keys])
         built = self.matchers.pop(submap.anchor, None)  # put back last: the dict's order is the use order
         if built is None or len(built[0]) != len(relative) or self._moved(built[0], relative):
-            built = (relative, BranchAndBound(self._grid(submap, estimates, margin), self.grid_cfg.branch_levels))
+            built = (relative, self.matcher.pyramid(self._grid(submap, estimates, margin)))
         self.matchers[submap.anchor] = built
         while len(self.matchers) > self.cfg.cached_matchers:  # the least recently used goes
             del self.matchers[next(iter(self.matchers))]
@@ -136,7 +134,7 @@ class LoopCloser:
         """Verified loop closures of scan k against at most ``budget`` older submaps near its pose;
         ``drift(anchor, k, distance)`` is the covariance the odometry accumulated between the two poses."""
         current = estimates[k]
-        margin = max(2 * self.front_cfg.window_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
+        margin = max(self.matcher.options.response_m, self.cfg.window_m) + 3 * self.grid_cfg.sigma_m
         found = []
         for s in self._candidates(current, estimates, budget):
             self.tried[s.anchor] = k
@@ -200,22 +198,16 @@ class LoopCloser:
         refined, with the response surface around it (its covariance, Olson 2009 §IV) and its score's
         weight: 0 at ``min_score``, 1 from ``min_score + score_ramp`` on."""
         c = self.cfg
-        found = matcher.match(points.xy, points.normals, around, c.window_m, np.radians(c.window_deg),
-                              np.radians(self.front_cfg.angle_step_deg), c.min_score)
+        found = self.matcher.around(matcher, points.xy, points.normals, around, c.window_m, np.radians(c.window_deg),
+                                    c.min_score)
         if found.pose is None:
             return None
-        local, pose = self._local_fit(matcher.grid, points, found.pose)
+        local, pose = self.matcher.fit(matcher.grid, points.xy, points.normals, found.pose)
         return local, pose, smooth_step((local.score - c.min_score) / c.score_ramp)
 
     def _degenerate(self, grid: LikelihoodGrid, points: ScanPoints, pose: np.ndarray, covariance: np.ndarray) -> bool:
         """Whether the points that agree with the map leave a direction unfixed (Zhang et al. 2016)."""
-        return self.degeneracy.matched_weak(grid, pose, points.xy, points.normals, covariance) is not None
-
-    def _local_fit(self, grid: LikelihoodGrid, points: ScanPoints, start: np.ndarray):
-        f, step = self.front_cfg, np.radians(self.front_cfg.angle_step_deg)
-        local = correlative_match(grid, points.xy, points.normals, start, 2 * f.window_m, np.radians(2 * f.window_deg),
-                                  step)
-        return local, refine_pose(grid, points.xy, points.normals, local.pose, grid.resolution, step)
+        return self.matcher.weak(grid, pose, points.xy, points.normals, covariance) is not None
 
     def whole_map(self, keys: list[int], estimates: dict[int, np.ndarray]) -> tuple[LikelihoodGrid, np.ndarray]:
         """The likelihood field of the scans ``keys`` (oldest first) at their latest poses with the free space
@@ -263,12 +255,12 @@ class LoopCloser:
         """The scan's best pose against ``grid`` within ``radius_m`` of the first of ``guesses`` (G, 3), at
         every heading its normals or the guesses suggest (one step of any motion, as the front end searches
         its local map): its pose, score and covariance there (score 0 where nothing matches)."""
-        headings = HeadingSearch.from_config(self.front_cfg).headings(points.normals, map_normals, guesses[:, 2])
-        found = BranchAndBound(grid, self.grid_cfg.branch_levels).search(points.xy, points.normals, guesses[0, :2],
-                                                                        headings, radius_m, 0.0, seeds=guesses)
+        headings = self.matcher.headings(points.normals, map_normals, guesses[:, 2])
+        found = self.matcher.search(grid, points.xy, points.normals, guesses[0, :2], headings, radius_m, 0.0,
+                                    seeds=guesses)
         if found.pose is None:
             return guesses[0], 0.0, self.floor
-        local, pose = self._local_fit(grid, points, found.pose)
+        local, pose = self.matcher.fit(grid, points.xy, points.normals, found.pose)
         return pose, fit_score(grid, points.xy, points.normals, pose), local.covariance
 
     def relocalize(self, k: int, points: ScanPoints, estimates: dict[int, np.ndarray],
@@ -279,28 +271,26 @@ class LoopCloser:
         and every heading the normals suggest; None when no place holds it unambiguously (a rival place
         within the ambiguity margin: a symmetric room), or the match is weak or degenerate. The
         constraint ties it to the map scan nearest the place found."""
-        c, f = self.cfg, self.front_cfg
+        c, matcher = self.cfg, self.relocalizer
         keys = self.map_keys(k, before)
         if not keys:
             return None
         grid, normals = whole or self.whole_map(keys, estimates)
         lo, hi = grid.origin, grid.origin + np.array(grid.values.shape) * grid.resolution
-        headings = HeadingSearch.from_config(f).headings(points.normals, normals)
-        found = BranchAndBound(grid, c.relocalize_levels).search(
-            points.xy, points.normals, 0.5 * (lo + hi), headings,
-            0.5 * float(np.max(hi - lo)), c.relocalize_min_score, 1.0 - f.ambiguity_margin - f.lattice_allowance)
+        headings = matcher.headings(points.normals, normals)
+        found = matcher.search(grid, points.xy, points.normals, 0.5 * (lo + hi), headings,
+                               0.5 * float(np.max(hi - lo)), c.relocalize_min_score, matcher.keep_ratio)
         if found.pose is None:
             return None
-        places, _ = distinct(found.candidates, found.scores, f.distinct_m, np.radians(f.distinct_deg),
-                             f.refined_candidates)
-        fits = [self._local_fit(grid, points, place) for place in places]
+        places, _ = matcher.distinct(found.candidates, found.scores)
+        fits = [matcher.fit(grid, points.xy, points.normals, place) for place in places]
         scores = np.array([fit_score(grid, points.xy, points.normals, pose) for _, pose in fits])
         best = int(np.argmax(scores))
         (local, pose), score = fits[best], float(scores[best])
         rivals = np.delete(scores, best)
-        if np.any(rivals >= (1.0 - f.ambiguity_margin) * score) or score < c.relocalize_min_score:
+        if np.any(rivals >= (1.0 - matcher.options.ambiguity_margin) * score) or score < c.relocalize_min_score:
             return None
-        if self.degeneracy.matched_weak(grid, pose, points.xy, points.normals, local.covariance) is not None:
+        if matcher.weak(grid, pose, points.xy, points.normals, local.covariance) is not None:
             return None
         return replace(self.placed(k, pose, score, local.covariance, keys, estimates), searched_m2=grid.area_m2)
 
