@@ -498,8 +498,8 @@ def test_a_submaps_matcher_is_kept_while_its_scans_stay_put_relative_to_its_firs
     closer = LoopCloser.from_config(cfg)
     wall = np.column_stack([np.full(30, 3.0), np.linspace(-1.5, 1.5, 30)])
     for k in range(cfg.loop_closure.submap_scans):
-        closer.add(k, ScanPoints(wall, np.full(30, np.pi), np.zeros((0, 2))))
-    submap = closer.submaps[0]
+        closer.keyframes.insert(k, ScanPoints(wall, np.full(30, np.pi), np.zeros((0, 2))))
+    submap = closer.keyframes.submaps[0]
     estimates = {k: np.array([0.3 * k, 0.0, 0.0]) for k in submap.keys}
     first = closer._matcher(submap, estimates, 2.0)
     carried = {k: compose([5.0, -2.0, 0.7], p) for k, p in estimates.items()}  # the whole submap moved rigidly
@@ -522,13 +522,13 @@ def test_at_most_cached_matchers_are_kept_the_least_recently_used_dropped():
     closer = LoopCloser.from_config(cfg)
     wall = np.column_stack([np.full(30, 3.0), np.linspace(-1.5, 1.5, 30)])
     for k in range(3):
-        closer.add(k, ScanPoints(wall, np.full(30, np.pi), np.zeros((0, 2))))
+        closer.keyframes.insert(k, ScanPoints(wall, np.full(30, np.pi), np.zeros((0, 2))))
     estimates = {k: np.array([0.3 * k, 0.0, 0.0]) for k in range(3)}
-    first, second = (closer._matcher(closer.submaps[i], estimates, 2.0) for i in (0, 1))
-    assert closer._matcher(closer.submaps[0], estimates, 2.0) is first  # used again: now the most recent
-    closer._matcher(closer.submaps[2], estimates, 2.0)  # a third: the least recently used (the second) goes
+    first, second = (closer._matcher(closer.keyframes.submaps[i], estimates, 2.0) for i in (0, 1))
+    assert closer._matcher(closer.keyframes.submaps[0], estimates, 2.0) is first  # used again: now the most recent
+    closer._matcher(closer.keyframes.submaps[2], estimates, 2.0)  # a third: the least recently used (the second) goes
     assert sorted(closer.matchers) == [0, 2]
-    assert closer._matcher(closer.submaps[1], estimates, 2.0) is not second
+    assert closer._matcher(closer.keyframes.submaps[1], estimates, 2.0) is not second
 
 
 def test_loop_search_matches_a_few_submaps_a_scan_those_tried_longest_ago_first():
@@ -547,7 +547,7 @@ def test_loop_search_matches_a_few_submaps_a_scan_those_tried_longest_ago_first(
     laps, per = 7, lc.submap_scans
     estimates = {}
     for k in range((laps + lc.skip_submaps + 1) * per):  # submaps 0 … laps − 1 at the place, then the latest
-        closer.add(k, empty)
+        closer.keyframes.insert(k, empty)
         lap = k // per
         estimates[k] = np.array([0.1 * lap, 0.0, 0.0]) if lap < laps else np.array([50.0 + k, 0.0, 0.0])
     here, budget = np.zeros(3), lc.loop_matches_per_scan

@@ -181,7 +181,8 @@ def test_with_odometry_the_front_end_stays_in_the_odometry_steps_core():
     odometry = np.array([[0.0, 0.0, 0.0], [0.5, 0.0, np.radians(2.0)]])
     front = FrontEnd.from_config(cfg, odometry)
     first = front.register(0, scans[0], {})
-    front.update(0, first, scans[0], None)
+    front.keyframes.insert(0, scans[0])
+    front.update(first, None)
     step = front.register(1, scans[1], {0: first.pose})
     reach = ODOMETRY_CORE_SIGMAS * front.motion.odometry_sigmas
     offset = step.pose - odometry[1]

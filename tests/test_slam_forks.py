@@ -28,13 +28,24 @@ def walk(n: int, turn_at: int | None = None) -> np.ndarray:
     return np.array(poses)
 
 
+class StubKeyframes:
+    """Every scan before ``before`` is a keyframe, with no points: every branch is placed where it is
+    (:meth:`Forks._placed`)."""
+
+    points: dict = {}
+
+    @staticmethod
+    def before(k, before=None):
+        return list(range(before))
+
+
 class StubCloser:
     """The loop closer's side of a fork: a match with the map from before it near ``place`` (tied to
     scan 0) of ``score`` for the rival branch, and ``chosen`` (a score) for the chosen branch."""
 
     def __init__(self, place: np.ndarray, score: float, chosen: float = 0.0):
         self.place, self.score, self.chosen, self.asked = place, score, chosen, []
-        self.points = {}  # no scans: every branch is placed where it is (:meth:`Forks._placed`)
+        self.keyframes = StubKeyframes()
 
     def matched_in(self, matcher, k, pose, keys, estimates):
         self.asked.append((k, pose, tuple(keys)))
@@ -43,9 +54,6 @@ class StubCloser:
         if np.linalg.norm(pose[:2] - self.place[:2]) > 0.5:
             return None
         return LoopClosure(0, k, between(estimates[0], pose), COV, self.score, 1.0)
-
-    def map_keys(self, k, before=None):
-        return list(range(before))
 
     def whole_map(self, keys, estimates):
         from radioslam.slam.grid import LikelihoodGrid

@@ -32,15 +32,24 @@ class GridStub:
     area_m2 = 400.0
 
 
+class KeyframesStub:
+    """Every scan before k is a keyframe (with no points: the stubbed searches read none)."""
+
+    points: dict = {}
+
+    @staticmethod
+    def before(k, before=None):
+        return list(range(k if before is None else min(k, before)))
+
+
 class MapStub:
     """The loop closer's searches as a test sets them: ``follow`` finds a place a step on from the
     first guess with ``score``; the whole-map search places a scan 5 m off; nothing looks alike."""
 
-    def __init__(self, follow_score: float = 0.6):
-        self.follow_score, self.followed, self.points = follow_score, [], {}
+    keyframes = KeyframesStub()
 
-    def map_keys(self, k, before=None):
-        return list(range(k if before is None else min(k, before)))
+    def __init__(self, follow_score: float = 0.6):
+        self.follow_score, self.followed = follow_score, []
 
     def whole_map(self, keys, estimates):
         return GridStub(), np.zeros(0)
@@ -51,7 +60,7 @@ class MapStub:
 
     def relocalize(self, k, points, estimates, before=None, whole=None):
         return replace(LoopCloser.placed(k, estimates[k - 1] + np.array([5.0, 0.0, 0.0]), 0.9, np.eye(3) * 1e-4,
-                                         self.map_keys(k, before), estimates), searched_m2=400.0)
+                                         self.keyframes.before(k, before), estimates), searched_m2=400.0)
 
     def looks_alike(self, *args):
         return False

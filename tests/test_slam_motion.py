@@ -129,7 +129,7 @@ def test_relocalization_finds_a_scan_taken_elsewhere_in_the_mapped_room():
     frame = walk[0]
     estimates = {k: mapped.poses[k] for k in range(12)}
     for k in range(12):
-        closer.add(k, prepare_points(scans[k], cfg.scan, cfg.grid))
+        closer.keyframes.insert(k, prepare_points(scans[k], cfg.scan, cfg.grid))
     found = closer.relocalize(12, prepare_points(scans[12], cfg.scan, cfg.grid), estimates)
     assert found is not None and found.relocalization
     placed = compose(estimates[found.anchor], found.relative)

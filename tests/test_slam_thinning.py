@@ -86,7 +86,7 @@ def test_the_whole_map_grid_stays_bounded_however_long_the_walk():
     closer = LoopCloser.from_config(cfg)
     scans, estimates = _corridor_walk(300, 2.0, 1024)
     for k, points in scans.items():
-        closer.add(k, points)
+        closer.keyframes.insert(k, points)
     keys = list(scans)
     tracemalloc.start()
     grid, normals = closer.whole_map(keys, estimates)
@@ -103,9 +103,9 @@ def test_the_whole_map_grid_stays_bounded_however_long_the_walk():
     from radioslam.slam.grid import LikelihoodGrid
     from radioslam.slam.scan_points import fused_free, fused_points
 
-    xy, nrm = fused_points(short, estimates, closer.points, np.zeros(3))
+    xy, nrm = fused_points(short, estimates, closer.keyframes.points, np.zeros(3))
     g = cfg.grid
     whole = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, cfg.loop_closure.relocalize_margin_m, nrm,
                                        np.radians(g.normal_sigma_deg), g.plane_reach_m,
-                                       fused_free(short, estimates, closer.points), g.free_penalty)
+                                       fused_free(short, estimates, closer.keyframes.points), g.free_penalty)
     assert np.array_equal(clipped.fields, whole.fields) and np.array_equal(clipped.origin, whole.origin)

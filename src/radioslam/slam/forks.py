@@ -148,7 +148,7 @@ class Forks:
         self.rivals.keep_poses(k, estimates[k - 1], turned, Cause.TURNED)
         if not self.cfg.fork_limit:
             return
-        keys = loop_closer.map_keys(k, before=k)
+        keys = loop_closer.keyframes.before(k, before=k)
         if not len(turned) or not keys:
             return
         while len(self.open) >= self.cfg.fork_limit:
@@ -158,7 +158,7 @@ class Forks:
             # when every one is contradicted, the latest: the later ones inherit an earlier one's wrong branch
             # (narrow-corridor's fourth corner, its fold contradicted, and two forks after it on that fold whose
             # chosen branches are contradicted by it alone)
-            contested = [self._contradicted(*self._chosen_on_free(f, k - 1, estimates, loop_closer.points))
+            contested = [self._contradicted(*self._chosen_on_free(f, k - 1, estimates, loop_closer.keyframes.points))
                          for f in self.open]
             del self.open[contested.index(False) if False in contested else -1]
         self.open.append(Fork(k, np.array([between(estimates[k - 1], r) for r in turned]),
@@ -230,7 +230,7 @@ class Forks:
         k that contradicts its local map is then that fork's to decide, not a relocalization's (a fold
         running into the map's free space: narrow-corridor seed 2's second corner, 2 of 298 points up to
         scan 65, 13 of 333 with scan 66, which was relocalized to the block's 180° twin)."""
-        estimates, scans = {**estimates, k: step.pose}, {**loop_closer.points, k: points}
+        estimates, scans = {**estimates, k: step.pose}, {**loop_closer.keyframes.points, k: points}
         return any(self._contradicted(*self._chosen_on_free(f, k, estimates, scans)) for f in self.open
                    if f.key < k)
 
@@ -275,7 +275,7 @@ class Forks:
                 chosen = loop_closer.matched_in(fork.matcher, k, estimates[k], fork.keys, estimates)
                 self.chosen_scores[fork.key] = max(self.chosen_scores.get(fork.key, 0.0),
                                                   0.0 if chosen is None else chosen.score)
-                chosen_on_free[fork.key] = self._chosen_on_free(fork, k, estimates, loop_closer.points)
+                chosen_on_free[fork.key] = self._chosen_on_free(fork, k, estimates, loop_closer.keyframes.points)
             found = loop_closer.matched_in(fork.matcher, k, compose(jump, estimates[k]), fork.keys, estimates)
             if found is not None and found.weight >= self.cfg.fork_weight and \
                     (name not in self.rival_loops or found.score > self.rival_loops[name].score):
@@ -290,8 +290,8 @@ class Forks:
             level = self.cfg.fork_significance ** (1 if looped or last else 2)
             if not self._contradicted_more(on_free, 0, level):
                 continue  # too few of the chosen branch's points on free space even against none of the rival's
-            placed = self._placed(fork, k, estimates, loop_closer.points, jump)
-            rival_on_free = self._on_free(fork, k, estimates, loop_closer.points, placed)[0]
+            placed = self._placed(fork, k, estimates, loop_closer.keyframes.points, jump)
+            rival_on_free = self._on_free(fork, k, estimates, loop_closer.keyframes.points, placed)[0]
             switches = placed_switches(switches, placed)
             if not self._contradicted_more(on_free, rival_on_free, level):
                 continue  # the chosen branch disagrees with the map from before the fork no more than the rival

@@ -29,9 +29,10 @@ from radioslam.slam.config import FrontEndConfig, GridConfig, MotionConfig, Scan
 from radioslam.slam.correlative import candidate_likelihoods
 from radioslam.slam.degeneracy import remap
 from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.keyframe_map import KeyframeMap
 from radioslam.slam.motion import Hypothesis, MotionHypothesis, MotionModel, jump_covariance
 from radioslam.slam.scan_matcher import ScanMatcher, front_end_matcher
-from radioslam.slam.scan_points import ScanPoints, map_grid
+from radioslam.slam.scan_points import ScanPoints
 from radioslam.slam.se2 import between, pose_covariance, wrap_angle
 from radioslam.slam.status import ScanStatus
 
@@ -93,19 +94,19 @@ class FrontEnd:
     """Built from plain settings by :meth:`from_config`; ``register`` then ``update`` per scan."""
 
     def __init__(self, grid: GridConfig, scan: ScanConfig, cfg: FrontEndConfig, motion_cfg: MotionConfig,
-                 motion: MotionModel, matcher: ScanMatcher):
+                 motion: MotionModel, matcher: ScanMatcher, keyframes: KeyframeMap):
         self.grid_cfg, self.scan_cfg, self.cfg, self.motion_cfg, self.motion = grid, scan, cfg, motion_cfg, motion
         self.matcher, self.degeneracy = matcher, matcher.degeneracy
+        self.keyframes = keyframes  # the map's scans (the session inserts them); the local map is the latest
         self.step_rad = matcher.options.angle_step_rad
         self.predicted = pose_covariance(motion_cfg.predicted_sigma_m, motion_cfg.predicted_sigma_deg)
         self.jump = jump_covariance(motion_cfg)  # a relocalized scan's step: the relocalization fixes the pose
-        self.keys: list[int] = []  # scans of the local map, oldest first
-        self.points: dict[int, ScanPoints] = {}
 
     @classmethod
-    def from_config(cls, cfg, odometry: np.ndarray | None = None) -> "FrontEnd":
+    def from_config(cls, cfg, odometry: np.ndarray | None = None, keyframes: KeyframeMap | None = None) -> "FrontEnd":
         motion = MotionModel.from_config(cfg.motion, odometry)
-        return cls(cfg.grid, cfg.scan, cfg.front_end, cfg.motion, motion, front_end_matcher(cfg))
+        return cls(cfg.grid, cfg.scan, cfg.front_end, cfg.motion, motion, front_end_matcher(cfg),
+                   KeyframeMap.from_config(cfg) if keyframes is None else keyframes)
 
     def register(self, k: int, points: ScanPoints, estimates: dict[int, np.ndarray]) -> Step:
         """Scan k's pose; ``estimates`` holds every earlier pose (the latest solution)."""
@@ -114,7 +115,7 @@ class FrontEnd:
             pose = np.zeros(3) if last is None else self.motion.predict(k, last)
             return Step(pose, self.predicted, ScanStatus.SKIPPED,
                         note=f"{len(points)} points (< {self.scan_cfg.min_points}), skipped")
-        if not self.keys:  # the first scan defines the map frame
+        if not len(self.keyframes):  # the first scan defines the map frame
             pose = np.zeros(3) if last is None else self.motion.predict(k, last)
             return Step(pose, self.predicted, ScanStatus.MATCHED)
         return self._match(k, points, estimates, last)
@@ -309,17 +310,14 @@ class FrontEnd:
     def _local_grid(self, estimates: dict[int, np.ndarray]) -> tuple[LikelihoodGrid, np.ndarray]:
         """The likelihood field of the local map's scans at their latest poses (world frame), and the
         map points' world normals."""
-        return map_grid(self.local_map_keys(estimates), estimates, self.points, self.grid_cfg)
+        return self.keyframes.grid(self.local_map_keys(estimates), estimates, self.grid_cfg)
 
     def local_map_keys(self, estimates: dict[int, np.ndarray]) -> list[int]:
         """The front end's local map now (:func:`local_map_keys`)."""
-        return local_map_keys(self.keys, estimates, self.cfg)
+        return local_map_keys(self.keyframes.keys, estimates, self.cfg)
 
-    def update(self, k: int, step: Step, points: ScanPoints, previous: np.ndarray | None) -> None:
-        """Scan k joins the local map (unless skipped) and the motion model learns its step."""
-        if step.status is not ScanStatus.SKIPPED:
-            self.keys.append(k)
-            self.points[k] = points
+    def update(self, step: Step, previous: np.ndarray | None) -> None:
+        """The motion model learns the step just taken (from the pose before it, ``previous``)."""
         jumped = previous is None or step.status is ScanStatus.RELOCALIZED
         self.motion.update(None if jumped else between(previous, step.pose),
                            observed=step.status is ScanStatus.MATCHED)

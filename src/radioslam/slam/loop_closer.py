@@ -1,10 +1,10 @@
 """Loop closure and relocalization against submaps (Cartographer's ``ConstraintBuilder2D``:
 Hess, Kohler, Rapp, Andor, "Real-time loop closure in 2D LIDAR SLAM", ICRA 2016, §V).
 
-The loop closer owns the submaps (N consecutive scans fused in the frame of the first),
-one branch-and-bound matcher per submap (kept while its scans stay put relative to its first one,
-as Cartographer keeps a finished submap's grid: rebuilt only once one has moved by
-``submap_rebuild_m`` or ``submap_rebuild_deg``, not at every pose-graph solution; at most
+The loop closer matches against the map's submaps (N consecutive keyframes fused in the frame of the first:
+:class:`~radioslam.slam.keyframe_map.KeyframeMap`), one branch-and-bound matcher per submap (kept while its
+scans stay put relative to its first one, as Cartographer keeps a finished submap's grid: rebuilt only once one
+has moved by ``submap_rebuild_m`` or ``submap_rebuild_deg``, not at every pose-graph solution; at most
 ``cached_matchers`` of them, the least recently used dropped, and a dropped one matched again only
 when no kept or new one is near) and the acceptance tests of a loop:
 
@@ -37,6 +37,7 @@ import numpy as np
 from radioslam.slam.branch_bound import BranchAndBound
 from radioslam.slam.config import GridConfig, LoopClosureConfig
 from radioslam.slam.grid import LikelihoodGrid
+from radioslam.slam.keyframe_map import KeyframeMap
 from radioslam.slam.pose_graph import local_covariance
 from radioslam.slam.refine import fit_score
 from radioslam.slam.scan_matcher import ScanMatcher, loop_matcher, relocalization_matcher
@@ -75,8 +76,7 @@ class LoopCloser:
     cfg: LoopClosureConfig
     matcher: ScanMatcher  # a loop's, within its window of the pose the graph predicts
     relocalizer: ScanMatcher  # relocalization's, over the whole map
-    submaps: list[Submap] = field(default_factory=list)
-    points: dict[int, ScanPoints] = field(default_factory=dict)
+    keyframes: KeyframeMap  # the map's scans and their submaps (the session inserts them)
     matchers: dict[int, tuple[np.ndarray, BranchAndBound]] = field(default_factory=dict)  # anchor → (its scans'
     # poses in the anchor's frame when the matcher was built, the matcher)
     tried: dict[int, int] = field(default_factory=dict)  # anchor → the last scan matched against it
@@ -87,19 +87,13 @@ class LoopCloser:
         return self.matcher.floor
 
     @classmethod
-    def from_config(cls, cfg) -> "LoopCloser":
-        return cls(cfg.grid, cfg.loop_closure, loop_matcher(cfg), relocalization_matcher(cfg))
-
-    def add(self, k: int, points: ScanPoints) -> None:
-        """Scan k joins the current submap (a new one every ``submap_scans`` scans)."""
-        if not self.submaps or len(self.submaps[-1].keys) >= self.cfg.submap_scans:
-            self.submaps.append(Submap())
-        self.submaps[-1].keys.append(k)
-        self.points[k] = points
+    def from_config(cls, cfg, keyframes: KeyframeMap | None = None) -> "LoopCloser":
+        return cls(cfg.grid, cfg.loop_closure, loop_matcher(cfg), relocalization_matcher(cfg),
+                   KeyframeMap.from_config(cfg) if keyframes is None else keyframes)
 
     def _grid(self, submap: Submap, estimates, margin: float) -> LikelihoodGrid:
         g = self.grid_cfg
-        xy, nrm = fused_points(submap.keys, estimates, self.points, estimates[submap.anchor])
+        xy, nrm = fused_points(submap.keys, estimates, self.keyframes.points, estimates[submap.anchor])
         return LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, nrm, np.radians(g.normal_sigma_deg),
                                           self.cfg.plane_reach_m)
 
@@ -140,8 +134,8 @@ class LoopCloser:
             self.tried[s.anchor] = k
             matcher = self._matcher(s, estimates, margin)
             predicted = between(estimates[s.anchor], current)
-            loop = self._match(matcher, self.points[k], predicted, drift(s.anchor, k, np.linalg.norm(predicted[:2])),
-                               s.anchor, k)
+            loop = self._match(matcher, self.keyframes.points[k], predicted,
+                               drift(s.anchor, k, np.linalg.norm(predicted[:2])), s.anchor, k)
             if loop is not None:
                 found.append(loop)
         return found
@@ -150,7 +144,8 @@ class LoopCloser:
         """The older submaps (not the ``skip_submaps`` latest) with a scan within ``radius_m`` of the pose
         ``current``: at most ``budget`` of them, never tried ones first, then those whose matchers are kept,
         each group the one tried longest ago first, then the nearest."""
-        older = self.submaps[:max(0, len(self.submaps) - 1 - self.cfg.skip_submaps)]
+        submaps = self.keyframes.submaps
+        older = submaps[:max(0, len(submaps) - 1 - self.cfg.skip_submaps)]
         if not older or budget <= 0:
             return []
         keys = [m for s in older for m in s.keys]
@@ -183,7 +178,7 @@ class LoopCloser:
         """Scan k matched against a whole map (``matcher`` over the world-frame grid of the scans
         ``keys``) within the loop window of ``pose``: a loop tied to the map scan nearest the place,
         weighted by its score alone (no chain to gate it against), or None (weak, degenerate)."""
-        points = self.points[k]
+        points = self.keyframes.points[k]
         fit = self._window_fit(matcher, points, pose)
         if fit is None:
             return None
@@ -218,23 +213,19 @@ class LoopCloser:
         g, radius = self.grid_cfg, self.cfg.relocalize_radius_m
         centre = estimates[keys[-1]][:2]
         # the scans that can reach the square (a far one's points cannot), in their order: memory bounded too
-        reach = np.array([self.points[m].reach for m in keys])
+        reach = np.array([self.keyframes.points[m].reach for m in keys])
         poses = np.array([estimates[m][:2] for m in keys])
         keys = [m for m, inside in zip(keys, np.max(np.abs(poses - centre), axis=1) <= radius + reach) if inside]
-        xy, normals = fused_points(keys, estimates, self.points, np.zeros(3))
-        free = fused_free(keys, estimates, self.points)
+        xy, normals = fused_points(keys, estimates, self.keyframes.points, np.zeros(3))
+        free = fused_free(keys, estimates, self.keyframes.points)
         near = np.max(np.abs(xy - centre), axis=1) <= radius
         if not near.all():
-            near[len(xy) - len(self.points[keys[-1]]):] = True  # the latest scan's own points: never an empty map
+            near[len(xy) - len(self.keyframes.points[keys[-1]]):] = True  # the latest scan's own points: a map
             xy, normals = xy[near], normals[near]
             free = free[np.max(np.abs(free - centre), axis=1) <= radius]
         grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, self.cfg.relocalize_margin_m, normals,
                                           np.radians(g.normal_sigma_deg), g.plane_reach_m, free, g.free_penalty)
         return grid, normals
-
-    def map_keys(self, k: int, before: int | None = None) -> list[int]:
-        """Every scan of the map other than k (and before ``before``)."""
-        return [m for m in self.points if m != k and (before is None or m < before)]
 
     def looks_alike(self, jump: np.ndarray, pose: np.ndarray, keys: list[int], grid: LikelihoodGrid,
                     estimates: dict[int, np.ndarray]) -> bool:
@@ -246,7 +237,7 @@ class LoopCloser:
         near = [m for m in keys if np.linalg.norm(estimates[m][:2] - pose[:2]) <= self.cfg.radius_m]
         if not near:
             return False
-        xy, normals = fused_points(near, estimates, self.points, np.zeros(3))
+        xy, normals = fused_points(near, estimates, self.keyframes.points, np.zeros(3))
         in_place = fit_score(grid, xy, normals, np.zeros(3))
         return fit_score(grid, xy, normals, jump) >= self.cfg.self_similar * in_place
 
@@ -272,7 +263,7 @@ class LoopCloser:
         within the ambiguity margin: a symmetric room), or the match is weak or degenerate. The
         constraint ties it to the map scan nearest the place found."""
         c, matcher = self.cfg, self.relocalizer
-        keys = self.map_keys(k, before)
+        keys = self.keyframes.before(k, before)
         if not keys:
             return None
         grid, normals = whole or self.whole_map(keys, estimates)

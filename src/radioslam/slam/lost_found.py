@@ -174,7 +174,7 @@ class LostAndFound:
     def _open(self, k, pose, score, points, estimates, loop_closer: LoopCloser) -> None:
         """A trial for scan k: first where the terminal was taken (after a jump), then, if its score
         dropped, wherever in the whole map before it it fits best."""
-        keys = loop_closer.map_keys(k, before=k)
+        keys = loop_closer.keyframes.before(k, before=k)
         if not keys:
             return
         grid, normals = loop_closer.whole_map(keys, estimates)
@@ -222,7 +222,7 @@ class LostAndFound:
         """A trial opened by ``found`` (at ``place``) if the scan itself is more probable there than at the front
         end's ``fronts``: the jump's prior is paid by the scans that follow, or the trial fails."""
         odds = self.posterior.log_odds(k, points, place, fronts, estimates[k - 1], keys, estimates,
-                                       loop_closer.points, area_m2)
+                                       loop_closer.keyframes.points, area_m2)
         jump = self.jump_log_odds(k, place, pose, estimates, area_m2)
         if odds - jump <= 0.0:
             return False
@@ -238,7 +238,7 @@ class LostAndFound:
                                                             self.max_step_m)
         front_grid, front_normals = loop_closer.whole_map(keys, estimates)  # the trial's scans at the front end's
         fronts = self._front_placements(pose, points, front_grid, front_normals, loop_closer)
-        trial.log_odds += self.log_odds(k, points, place, fronts, keys, places, estimates, loop_closer.points,
+        trial.log_odds += self.log_odds(k, points, place, fronts, keys, places, estimates, loop_closer.keyframes.points,
                                         velocity=trial.velocity(estimates))
         if found_score < self.cfg.relocalize_min_score or trial.evidence < 0.0 or \
                 len(trial.found) >= self.cfg.max_trial_scans:

@@ -3,10 +3,10 @@ comes and gives its pose at once; :meth:`SlamSession.finish` ends the walk and g
 :class:`~radioslam.slam.result.SlamResult`. An offline run is a session fed every scan, so a live
 session and an offline run of the same scans end with the same trajectory.
 
-The components each own one job (issue #12): the :class:`~radioslam.slam.front_end.FrontEnd`
-registers a scan against its local map, the :class:`~radioslam.slam.loop_closer.LoopCloser`
-owns the submaps, loop closures and relocalization, the
-:class:`~radioslam.slam.back_end.BackEnd` owns the pose graph. :meth:`SlamSession.add` is the story
+The components each own one job (issue #12): the :class:`~radioslam.slam.keyframe_map.KeyframeMap` holds the
+scans and their submaps, the :class:`~radioslam.slam.front_end.FrontEnd` registers a scan against its local map of
+the latest of them, the :class:`~radioslam.slam.loop_closer.LoopCloser` closes loops against the submaps and
+relocalizes, the :class:`~radioslam.slam.back_end.BackEnd` owns the pose graph. :meth:`SlamSession.add` is the story
 of one scan, one step per comment.
 """
 
@@ -25,6 +25,7 @@ from radioslam.slam.ending import Judge, Source, odometry_in_map_frame
 from radioslam.slam.errors import SlamError
 from radioslam.slam.forks import Decision, Forks
 from radioslam.slam.front_end import FrontEnd, Step
+from radioslam.slam.keyframe_map import KeyframeMap
 from radioslam.slam.loop_closer import LoopCloser, LoopClosure
 from radioslam.slam.lost_found import LostAndFound
 from radioslam.slam.occupancy import OccupancyGrid
@@ -58,7 +59,9 @@ class SlamSession:
                  odometry: np.ndarray | None = None):
         self.cfg = cfg = cfg or SlamConfig()
         self.loop_hook = loop_hook or (lambda loop: loop)
-        self.front_end, self.loop_closer = FrontEnd.from_config(cfg, odometry), LoopCloser.from_config(cfg)
+        self.keyframes = KeyframeMap.from_config(cfg)  # the map's scans and submaps, shared by the components
+        self.front_end = FrontEnd.from_config(cfg, odometry, self.keyframes)
+        self.loop_closer = LoopCloser.from_config(cfg, self.keyframes)
         self.back_end = BackEnd.from_config(cfg)
         self.posterior = Posterior.from_config(cfg, self.front_end.motion)  # one scan's placement weighed
         self.rivals = Rivals()  # every decision's alternative, for the ending
@@ -82,8 +85,8 @@ class SlamSession:
 
     def map_points(self) -> np.ndarray:
         """(N, 2) every scan's points in the world frame at the latest solution."""
-        keys = sorted(self.loop_closer.points)
-        return fused_points(keys, self.back_end.estimates, self.loop_closer.points, np.zeros(3))[0] if keys else \
+        keys = self.keyframes.keys
+        return fused_points(keys, self.back_end.estimates, self.keyframes.points, np.zeros(3))[0] if keys else \
             np.zeros((0, 2))
 
     def add(self, scan: Scan) -> ScanUpdate:
@@ -106,7 +109,8 @@ class SlamSession:
         back_end.add(k, step, self.front_end.motion.odometry_step(k))
         forks.remember(k, step, back_end.estimates, self.loop_closer)
         self._keep_expected(k, step)
-        # 6. the scan joins the local map and the current submap; the motion model learns the step
+        # 6. the scan joins the map of keyframes (and so the local map and the current submap); the motion model
+        #    learns the step
         self._insert(k, step, points, scan)
         # 7. loop closures against older submaps near the pose (sampled while the walk is tied to the map)
         loops = self._loops(k, step)
@@ -177,12 +181,12 @@ class SlamSession:
                                      confirmed), confirmed
 
     def _insert(self, k: int, step: Step, points, scan: Scan) -> None:
-        """Step 6: the scan (thinned) into the local map, its submap and the live map; the step into the motion
-        model."""
-        self.front_end.update(k, step, points, self.back_end.estimates.get(k - 1))
+        """Step 6: the scan (thinned) into the map of keyframes (its submap) and the live occupancy map; the step
+        into the motion model."""
+        self.front_end.update(step, self.back_end.estimates.get(k - 1))
         if step.status is not ScanStatus.SKIPPED:
-            self.loop_closer.add(k, points)
-            self.map.add(k, scan.xy, self.loop_closer.submaps[-1].anchor, self.back_end.estimates)
+            self.keyframes.insert(k, points)
+            self.map.add(k, scan.xy, self.keyframes.submaps[-1].anchor, self.back_end.estimates)
 
     def _loops(self, k: int, step: Step) -> list[LoopClosure]:
         """Step 7: scan k's loop closures (none from a scan that fixed no pose), each through the loop hook."""
@@ -196,8 +200,8 @@ class SlamSession:
         the map before it (:meth:`Posterior.log_odds`)."""
         estimates = self.back_end.estimates
         return self.posterior.log_odds(k, points, self.back_end.relocalized_pose(found), step.pose[None],
-                                       estimates[k - 1], self.loop_closer.map_keys(k, before=k), estimates,
-                                       self.loop_closer.points, found.searched_m2)
+                                       estimates[k - 1], self.keyframes.before(k, before=k), estimates,
+                                       self.keyframes.points, found.searched_m2)
 
     def _decide(self, k: int, decided: Decision | None, loops: list[LoopClosure]) -> list[LoopClosure]:
         """A fork decided at scan k: its rival's poses taken; the loops of scan k that still hold."""
@@ -260,7 +264,7 @@ class SlamSession:
         odometry = odometry_in_map_frame(motion.odometry, result.poses[0]) if motion.odometry is not None else None
         if odometry is not None:
             candidates.append((Source.ODOMETRY, odometry))
-        judge, scans = Judge.from_config(self.cfg, self.posterior), self.loop_closer.points
+        judge, scans = Judge.from_config(self.cfg, self.posterior), self.keyframes.points
         answer = judge.scan_terms(result.poses, scans)
         branches = [(rival.key, judge.aligned(rival.key, poses, scans)) for rival, poses in
                     self.rivals.branches(result.poses)]

@@ -1,5 +1,6 @@
-"""One scan matcher (issue #47, point 5): branch and bound → distinct candidates → refinement → response covariance →
-degeneracy, one object that the front end, the loop closer and relocalization each hold with their own options."""
+"""The SLAM's structure (issue #47, point 5): one scan matcher (branch and bound → distinct candidates → refinement →
+response covariance → degeneracy) that the front end, the loop closer and relocalization each hold with their own
+options, and one map of keyframes and submaps that they all read, updated by insertion."""
 
 import numpy as np
 import pytest
@@ -60,3 +61,32 @@ def test_each_component_holds_its_own_matcher_from_its_own_settings():
     assert closer.matcher.options == loop.options and closer.relocalizer.options == whole.options
     assert not hasattr(closer, "front_cfg")
     assert FrontEnd.from_config(cfg).matcher.options == front.options
+
+
+def test_the_map_of_keyframes_is_one_store_updated_by_insertion(rng):
+    """A session's front end, loop closer and ending read one map of keyframes: every scan not skipped, in the order
+    it came, grouped into submaps of ``submap_scans``; a skipped scan is no keyframe (and no submap's)."""
+    from test_slam import synthetic_scans
+
+    from radioslam.sensing.pointcloud import Scan
+    from radioslam.slam.keyframe_map import KeyframeMap
+    from radioslam.slam.scan_points import ScanPoints
+    from radioslam.slam.session import SlamSession
+
+    keyframes = KeyframeMap(3)
+    for k in (0, 1, 2, 4, 5, 7, 8):
+        keyframes.insert(k, ScanPoints(np.zeros((1, 2)), np.zeros(1), np.zeros((0, 2))))
+    assert keyframes.keys == [0, 1, 2, 4, 5, 7, 8] == list(keyframes.points)
+    assert [s.keys for s in keyframes.submaps] == [[0, 1, 2], [4, 5, 7], [8]]
+    assert keyframes.before(5) == [0, 1, 2, 4, 7, 8] and keyframes.before(5, before=5) == [0, 1, 2, 4]
+
+    pts, nrm = room_points(rng, 600)
+    poses = np.array([[-1.0 + 0.2 * k, 0.5, 0.0] for k in range(6)])
+    scans = synthetic_scans(poses, pts, nrm, rng)
+    scans[3] = Scan.empty()
+    session = SlamSession(SlamConfig())
+    for scan in scans:
+        session.add(scan)
+    assert session.front_end.keyframes is session.loop_closer.keyframes is session.keyframes
+    assert session.keyframes.keys == [0, 1, 2, 4, 5]
+    assert sum(len(s.keys) for s in session.keyframes.submaps) == 5
