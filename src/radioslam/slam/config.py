@@ -285,7 +285,7 @@ class PlaneAdjustmentConfig(_Section):
     robust_c: float = Field(4.685, gt=0)
     # each pose is held near the pose graph's with this sd (fixed), or with its marginal sd there, at least
     # this (marginal: tight where loops closed, growing along an open chain: a hexagon walked five sides,
-    # 0.24 -> 0.04 m; but shelf-hall's aisle legs, where a shelf's double bounce passes for the outer
+    # 0.24 -> 0.04 m; but a shelf hall's aisle legs, where a shelf's double bounce passes for the outer
     # wall, slide 0.08 -> 0.12 m: see docs/notes.md, session 9), and the pose graph's steps at the front
     # end's step covariance times step_inflation² (the scans' information is in both: not counted twice)
     anchors: Anchors = Anchors.MARGINAL

@@ -18,14 +18,14 @@ robot mapping", IJRR 2013: keep the alternatives, let the data pick one):
    :meth:`radioslam.slam.loop_closer.LoopCloser.matched_in`), and so is the chosen branch's
    scan; each branch's best match since the fork is remembered (a rival branch walking back into
    that map matches it at once, while the evidence against the chosen branch piles up only over
-   the scans after: kidnapped paper-cnv, found 0.32 m from its true place but turned 180°);
+   the scans after);
 3. the fork is decided for the rival when all of these hold:
    - the rival's best match, a *rival loop*, has weight ≥ ``fork_weight`` and scores
      ``fork_gain`` better than the chosen branch's best match with that map (none: 0);
    - the chosen branch is *contradicted*: ≥ ``fork_contradicted`` of its points since the fork
      lie on space the frozen map saw through, significantly more of them than the rival branch's
-     (a sign test at ``fork_significance``: radio ghosts land there on either branch, one a scan
-     on shelf-hall's true branch). An exploring branch closes no loop with the old map while a
+     (a sign test at ``fork_significance``: radio ghosts land there on either branch, the true one
+     too). An exploring branch closes no loop with the old map while a
      rival in its mapped part may (a square room's 90° twin): a missing loop is no evidence
      against the choice, a wall where the terminal once looked through is. Where the room looks
      alike under the jump (a rectangle turned by 180°) both branches put their points on walls
@@ -35,9 +35,9 @@ robot mapping", IJRR 2013: keep the alternatives, let the data pick one):
    Or, without a rival loop that decides (none, or none ``fork_gain`` better), when the
    contradiction is overwhelming: the chosen branch's points on that free space against the
    rival's pass the sign test at ``fork_significance``². An exploring rival closes no loop with
-   the old map: a walk's corner taken for its corridor folded back onto itself (narrow-corridor's
-   first corner: the folded branch matches the old map as well as the corner, whose new walls it
-   has not seen, and puts 10 of its next scan's 71 points where the terminal walked).
+   the old map: a corner taken for its corridor folded back onto itself matches the old map as well
+   as the corner does (whose new walls the map has not seen), and puts the next scans' points where
+   the terminal walked.
 
    Each branch's points are counted where that map places the branch: its scans since the fork
    together, as one rigid scan, matched against it (:meth:`Forks._placed`): a rival from where
@@ -153,11 +153,10 @@ class Forks:
             return
         while len(self.open) >= self.cfg.fork_limit:
             # room for the new fork: the oldest one goes, unless the map from before it already contradicts its
-            # chosen branch (a wrong branch's trouble opens forks of its own: narrow-corridor's second corner,
-            # its fold running into the first corner four forks later); then the oldest uncontradicted one, and
-            # when every one is contradicted, the latest: the later ones inherit an earlier one's wrong branch
-            # (narrow-corridor's fourth corner, its fold contradicted, and two forks after it on that fold whose
-            # chosen branches are contradicted by it alone)
+            # chosen branch (a wrong branch's trouble opens forks of its own, which must not push out the fork
+            # that can undo it); then the oldest uncontradicted one, and when every one is contradicted, the
+            # latest: the later ones inherit an earlier one's wrong branch (their chosen branches are
+            # contradicted by it alone)
             contested = [self._contradicted(*self._chosen_on_free(f, k - 1, estimates, loop_closer.keyframes.points))
                          for f in self.open]
             del self.open[contested.index(False) if False in contested else -1]
@@ -201,9 +200,9 @@ class Forks:
         ``fork`` places it: the branch's scans fork … k together, as one rigid scan, matched against that
         map within ± ``fork_place_m``, ``fork_place_deg`` (Olson 2009's correlative search). A branch is a
         rigid hypothesis whose place is not known to the centimetre: a rival is where its fork scan's
-        candidate put it (narrow-corridor seed 2: 0.4 m along the corridor, where its branch put 51 points
-        on that map's free space, placed none), the chosen branch where its estimates drifted (seed 9:
-        0.25 m across the corridor, 26 of 162 points there, placed none)."""
+        candidate put it, the chosen branch where its estimates drifted, either of them decimetres off
+        along or across a corridor, where unplaced it puts many points on the map's free space and placed
+        none."""
         keys = fork.scans_since(k, scans)
         if not keys:
             return jump
@@ -228,8 +227,8 @@ class Forks:
         """Whether an open fork's chosen branch, scan k at its ``step`` with its ``points`` included, put
         ``fork_contradicted`` of its points since the fork on space the map from before saw through: a scan
         k that contradicts its local map is then that fork's to decide, not a relocalization's (a fold
-        running into the map's free space: narrow-corridor seed 2's second corner, 2 of 298 points up to
-        scan 65, 13 of 333 with scan 66, which was relocalized to the block's 180° twin)."""
+        running into the map's free space: relocalized, the scan would be placed on the fold's turned
+        twin)."""
         estimates, scans = {**estimates, k: step.pose}, {**loop_closer.keyframes.points, k: points}
         return any(self._contradicted(*self._chosen_on_free(f, k, estimates, scans)) for f in self.open
                    if f.key < k)
@@ -260,9 +259,8 @@ class Forks:
         At the walk's ``last`` scan no more evidence will come, so the contradiction alone decides at the
         plain significance, not its square: the square guards a decision that is tested again at every
         scan, and could wait for the next, against the many looks (a sequential test's truncation decides
-        on the evidence there is). narrow-corridor's fourth corner, eleven scans before the walk's end:
-        the fold puts 16–18 of its points on that map's free space against the rival's 1–2
-        (P = 4·10⁻⁵ … 7·10⁻⁴), so whether 10⁻⁴ was reached flipped with 1 µm of range."""
+        on the evidence there is): a fold taken a few scans before the end gathers a contradiction near
+        the squared level, which a micrometre of range would otherwise decide."""
         if status not in (ScanStatus.MATCHED, ScanStatus.AMBIGUOUS):
             return None
         open_keys = {f.key for f in self.open}

@@ -131,7 +131,7 @@ class FrontEnd:
         centre, window, headings = self._search_region(phi, map_normals, hypotheses, last)
         found = self.matcher.search(
             grid, xy, phi, centre, headings, window, 0.0,
-            1.0 - cfg.ambiguity_margin - cfg.lattice_allowance, lambda poses: self._prior_discount(poses, hypotheses),
+            self.matcher.keep_ratio, lambda poses: self._prior_discount(poses, hypotheses),
             np.array([h.pose for h in hypotheses]))
         if found.pose is None:
             return Step(primary, self.predicted, ScanStatus.PREDICTED, 0.0, note="nothing in the local map matches")
@@ -197,9 +197,8 @@ class FrontEnd:
         elif (jump := float(np.linalg.norm(pose[:2] - last[:2]))) > self.motion_cfg.max_step_m:
             # a pose no step reaches (the search window's corners lie beyond max_step_m), with no candidate near
             # the motion left to compare (each scored below trust, or none kept): the prediction's own fit stays
-            # a rival where it is turned from the pose taken (a fork's rival: narrow-corridor's fourth corner,
-            # folded 1.6 m away, when 1 µm of range kept the motion's candidate out of branch and bound's list,
-            # and with it the fork)
+            # a rival where it is turned from the pose taken (a fork's rival: where the motion's candidate fell
+            # out of branch and bound's list, a fold taken beyond a step would otherwise open no fork)
             widened = self._with_prediction_fit(rivals, prediction_fit())
             if len(widened) > len(rivals) and abs(wrap_angle(widened[-1, 2] - pose[2])) >= np.radians(cfg.distinct_deg):
                 rivals, status = widened, ScanStatus.AMBIGUOUS
@@ -263,8 +262,9 @@ class FrontEnd:
         :func:`choose` may pick, to be refined: the best ``refined_candidates`` by discounted score (branch
         and bound's order: the motion's picks), and those the scan itself explains clearly better than all
         of them (their own score beyond the ambiguity margin of theirs) whose discounted score is within
-        the margin of the best: a turn seen in the scan, which ``choose`` takes whatever its discount. A
-        U-turn ranked fifth by discounted score (hall-random-13, ranges moved by 1 µm) was never seen."""
+        the margin of the best: a turn seen in the scan, which ``choose`` takes whatever its discount. By
+        discounted score alone, a U-turn the scan shows clearly ranks below the walk-on candidates and is
+        never refined."""
         cfg, o = self.cfg, self.matcher.options
         by_motion, motion_scores = self.matcher.distinct(candidates, scores)
         seen = (scores * (1.0 - cfg.ambiguity_margin) > motion_scores.max()) & \
