@@ -501,15 +501,15 @@ def test_a_submaps_matcher_is_kept_while_its_scans_stay_put_relative_to_its_firs
         closer.keyframes.insert(k, ScanPoints(wall, np.full(30, np.pi), np.zeros((0, 2))))
     submap = closer.keyframes.submaps[0]
     estimates = {k: np.array([0.3 * k, 0.0, 0.0]) for k in submap.keys}
-    first = closer._matcher(submap, estimates, 2.0)
+    first = closer._pyramid(submap, estimates, 2.0)
     carried = {k: compose([5.0, -2.0, 0.7], p) for k, p in estimates.items()}  # the whole submap moved rigidly
-    assert closer._matcher(submap, carried, 2.0) is first
+    assert closer._pyramid(submap, carried, 2.0) is first
     nudged = {**carried, 3: compose(carried[3], [0.01, 0.0, np.radians(0.1)])}  # a centimetre: within half a cell
-    assert closer._matcher(submap, nudged, 2.0) is first
+    assert closer._pyramid(submap, nudged, 2.0) is first
     moved = {**carried, 3: compose(carried[3], [0.04, 0.0, 0.0])}  # beyond half a cell
-    rebuilt = closer._matcher(submap, moved, 2.0)
+    rebuilt = closer._pyramid(submap, moved, 2.0)
     assert rebuilt is not first
-    assert closer._matcher(submap, moved, 2.0) is rebuilt
+    assert closer._pyramid(submap, moved, 2.0) is rebuilt
 
 
 def test_at_most_cached_matchers_are_kept_the_least_recently_used_dropped():
@@ -524,11 +524,11 @@ def test_at_most_cached_matchers_are_kept_the_least_recently_used_dropped():
     for k in range(3):
         closer.keyframes.insert(k, ScanPoints(wall, np.full(30, np.pi), np.zeros((0, 2))))
     estimates = {k: np.array([0.3 * k, 0.0, 0.0]) for k in range(3)}
-    first, second = (closer._matcher(closer.keyframes.submaps[i], estimates, 2.0) for i in (0, 1))
-    assert closer._matcher(closer.keyframes.submaps[0], estimates, 2.0) is first  # used again: now the most recent
-    closer._matcher(closer.keyframes.submaps[2], estimates, 2.0)  # a third: the least recently used (the second) goes
-    assert sorted(closer.matchers) == [0, 2]
-    assert closer._matcher(closer.keyframes.submaps[1], estimates, 2.0) is not second
+    first, second = (closer._pyramid(closer.keyframes.submaps[i], estimates, 2.0) for i in (0, 1))
+    assert closer._pyramid(closer.keyframes.submaps[0], estimates, 2.0) is first  # used again: now the most recent
+    closer._pyramid(closer.keyframes.submaps[2], estimates, 2.0)  # a third: the least recently used (the second) goes
+    assert sorted(closer.pyramids) == [0, 2]
+    assert closer._pyramid(closer.keyframes.submaps[1], estimates, 2.0) is not second
 
 
 def test_loop_search_matches_a_few_submaps_a_scan_those_tried_longest_ago_first():
@@ -563,7 +563,7 @@ def test_loop_search_matches_a_few_submaps_a_scan_those_tried_longest_ago_first(
     third = [s.anchor for s in closer._candidates(here, estimates, budget)]
     assert third == [6 * per, 0, per]  # then the ones tried longest ago, nearest first among equals
     closer.tried[6 * per] = 102
-    closer.matchers = {4 * per: None, 6 * per: None}  # kept matchers come before dropped ones
+    closer.pyramids = {4 * per: None, 6 * per: None}  # kept matchers come before dropped ones
     assert [s.anchor for s in closer._candidates(here, estimates, budget)] == [4 * per, 6 * per, 0]
     assert [s.anchor for s in closer._candidates(here, estimates, 1)] == [4 * per]
     assert closer._candidates(here, estimates, 0) == []

@@ -82,10 +82,10 @@ class Fork:
     rivals: np.ndarray  # (R, 3) each rival's pose in the frame of pose key − 1
     grid: LikelihoodGrid  # the map of the scans before it
     keys: tuple[int, ...]  # those scans
-    levels: int  # the branch-and-bound levels of its matcher
+    levels: int  # the levels of its branch-and-bound pyramid
 
     @cached_property
-    def matcher(self) -> BranchAndBound:
+    def pyramid(self) -> BranchAndBound:
         """Branch and bound over the map from before the fork (built once, at its first use)."""
         return BranchAndBound(self.grid, self.levels)
 
@@ -270,11 +270,11 @@ class Forks:
         unlooped = []  # (rival's points on free space, fork, switches) of contradicted forks without a rival loop
         for name, fork, switches, jump in self.hypotheses(k, estimates):
             if fork.key not in chosen_on_free:
-                chosen = loop_closer.matched_in(fork.matcher, k, estimates[k], fork.keys, estimates)
+                chosen = loop_closer.matched_in(fork.pyramid, k, estimates[k], fork.keys, estimates)
                 self.chosen_scores[fork.key] = max(self.chosen_scores.get(fork.key, 0.0),
                                                   0.0 if chosen is None else chosen.score)
                 chosen_on_free[fork.key] = self._chosen_on_free(fork, k, estimates, loop_closer.keyframes.points)
-            found = loop_closer.matched_in(fork.matcher, k, compose(jump, estimates[k]), fork.keys, estimates)
+            found = loop_closer.matched_in(fork.pyramid, k, compose(jump, estimates[k]), fork.keys, estimates)
             if found is not None and found.weight >= self.cfg.fork_weight and \
                     (name not in self.rival_loops or found.score > self.rival_loops[name].score):
                 self.rival_loops[name] = found

@@ -2,7 +2,7 @@
 Hess, Kohler, Rapp, Andor, "Real-time loop closure in 2D LIDAR SLAM", ICRA 2016, §V).
 
 The loop closer matches against the map's submaps (N consecutive keyframes fused in the frame of the first:
-:class:`~radioslam.slam.keyframe_map.KeyframeMap`), one branch-and-bound matcher per submap (kept while its
+:class:`~radioslam.slam.keyframe_map.KeyframeMap`), one branch-and-bound pyramid per submap (kept while its
 scans stay put relative to its first one, as Cartographer keeps a finished submap's grid: rebuilt only once one
 has moved by ``submap_rebuild_m`` or ``submap_rebuild_deg``, not at every pose-graph solution; at most
 ``cached_matchers`` of them, the least recently used dropped, and a dropped one matched again only
@@ -77,8 +77,8 @@ class LoopCloser:
     matcher: ScanMatcher  # a loop's, within its window of the pose the graph predicts
     relocalizer: ScanMatcher  # relocalization's, over the whole map
     keyframes: KeyframeMap  # the map's scans and their submaps (the session inserts them)
-    matchers: dict[int, tuple[np.ndarray, BranchAndBound]] = field(default_factory=dict)  # anchor → (its scans'
-    # poses in the anchor's frame when the matcher was built, the matcher)
+    pyramids: dict[int, tuple[np.ndarray, BranchAndBound]] = field(default_factory=dict)  # anchor → (its scans'
+    # poses in the anchor's frame when its pyramid was built, the pyramid)
     tried: dict[int, int] = field(default_factory=dict)  # anchor → the last scan matched against it
 
     @property
@@ -97,16 +97,16 @@ class LoopCloser:
         return LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, margin, nrm, np.radians(g.normal_sigma_deg),
                                           self.cfg.plane_reach_m)
 
-    def _matcher(self, submap: Submap, estimates, margin: float) -> BranchAndBound:
-        """The submap's matcher, built again only once its scans have moved relative to its first one
+    def _pyramid(self, submap: Submap, estimates, margin: float) -> BranchAndBound:
+        """The submap's branch-and-bound pyramid, built again only once its scans have moved relative to its first one
         (by ``submap_rebuild_m`` or ``submap_rebuild_deg``) since it was built."""
         relative = np.array([between(estimates[submap.anchor], estimates[m]) for m in submap.keys])
-        built = self.matchers.pop(submap.anchor, None)  # put back last: the dict's order is the use order
+        built = self.pyramids.pop(submap.anchor, None)  # put back last: the dict's order is the use order
         if built is None or len(built[0]) != len(relative) or self._moved(built[0], relative):
             built = (relative, self.matcher.pyramid(self._grid(submap, estimates, margin)))
-        self.matchers[submap.anchor] = built
-        while len(self.matchers) > self.cfg.cached_matchers:  # the least recently used goes
-            del self.matchers[next(iter(self.matchers))]
+        self.pyramids[submap.anchor] = built
+        while len(self.pyramids) > self.cfg.cached_matchers:  # the least recently used goes
+            del self.pyramids[next(iter(self.pyramids))]
         return built[1]
 
     def _moved(self, before: np.ndarray, now: np.ndarray) -> bool:
@@ -132,9 +132,9 @@ class LoopCloser:
         found = []
         for s in self._candidates(current, estimates, budget):
             self.tried[s.anchor] = k
-            matcher = self._matcher(s, estimates, margin)
+            pyramid = self._pyramid(s, estimates, margin)
             predicted = between(estimates[s.anchor], current)
-            loop = self._match(matcher, self.keyframes.points[k], predicted,
+            loop = self._match(pyramid, self.keyframes.points[k], predicted,
                                drift(s.anchor, k, np.linalg.norm(predicted[:2])), s.anchor, k)
             if loop is not None:
                 found.append(loop)
@@ -142,7 +142,7 @@ class LoopCloser:
 
     def _candidates(self, current: np.ndarray, estimates: dict[int, np.ndarray], budget: int) -> list[Submap]:
         """The older submaps (not the ``skip_submaps`` latest) with a scan within ``radius_m`` of the pose
-        ``current``: at most ``budget`` of them, never tried ones first, then those whose matchers are kept,
+        ``current``: at most ``budget`` of them, never tried ones first, then those whose pyramids are kept,
         each group the one tried longest ago first, then the nearest."""
         submaps = self.keyframes.submaps
         older = submaps[:max(0, len(submaps) - 1 - self.cfg.skip_submaps)]
@@ -156,48 +156,48 @@ class LoopCloser:
         for s, d in zip(older, nearest):
             if d <= self.cfg.radius_m:
                 tried = self.tried.get(s.anchor, -1)
-                near.append((tried >= 0 and s.anchor not in self.matchers, tried, float(d), s.anchor, s))
+                near.append((tried >= 0 and s.anchor not in self.pyramids, tried, float(d), s.anchor, s))
         near.sort(key=lambda c: c[:4])
         return [c[4] for c in near[:budget]]
 
-    def _match(self, matcher: BranchAndBound, points: ScanPoints, predicted: np.ndarray, drift: np.ndarray,
+    def _match(self, pyramid: BranchAndBound, points: ScanPoints, predicted: np.ndarray, drift: np.ndarray,
                anchor: int, key: int) -> LoopClosure | None:
-        """A verified, weighted loop closure of the scan against a submap's matcher (anchor frame)."""
-        fit = self._window_fit(matcher, points, predicted)
+        """A verified, weighted loop closure of the scan against a submap's pyramid (anchor frame)."""
+        fit = self._window_fit(pyramid, points, predicted)
         if fit is None:
             return None
         local, pose, score_weight = fit
         chi2 = mahalanobis2(pose, predicted, drift + local.covariance + self.floor)
         weight = score_weight * smooth_step(2.0 * (self.cfg.gate_chi2 - chi2) / self.cfg.gate_chi2)
-        if weight <= 0.0 or self._degenerate(matcher.grid, points, pose, local.covariance):
+        if weight <= 0.0 or self._degenerate(pyramid.grid, points, pose, local.covariance):
             return None
         return LoopClosure(anchor, key, pose, (local.covariance + self.floor) / weight, local.score, weight)
 
-    def matched_in(self, matcher: BranchAndBound, k: int, pose: np.ndarray, keys: list[int] | tuple[int, ...],
+    def matched_in(self, pyramid: BranchAndBound, k: int, pose: np.ndarray, keys: list[int] | tuple[int, ...],
                    estimates: dict[int, np.ndarray]) -> LoopClosure | None:
-        """Scan k matched against a whole map (``matcher`` over the world-frame grid of the scans
+        """Scan k matched against a whole map (``pyramid`` over the world-frame grid of the scans
         ``keys``) within the loop window of ``pose``: a loop tied to the map scan nearest the place,
         weighted by its score alone (no chain to gate it against), or None (weak, degenerate)."""
         points = self.keyframes.points[k]
-        fit = self._window_fit(matcher, points, pose)
+        fit = self._window_fit(pyramid, points, pose)
         if fit is None:
             return None
         local, fitted, weight = fit
-        if weight <= 0.0 or self._degenerate(matcher.grid, points, fitted, local.covariance):
+        if weight <= 0.0 or self._degenerate(pyramid.grid, points, fitted, local.covariance):
             return None
         loop = self.placed(k, fitted, local.score, (local.covariance + self.floor) / weight, keys, estimates)
         return replace(loop, weight=weight, relocalization=False)
 
-    def _window_fit(self, matcher: BranchAndBound, points: ScanPoints, around: np.ndarray):
+    def _window_fit(self, pyramid: BranchAndBound, points: ScanPoints, around: np.ndarray):
         """The scan's best pose within the loop window of ``around`` (None: nothing scores ``min_score``),
         refined, with the response surface around it (its covariance, Olson 2009 §IV) and its score's
         weight: 0 at ``min_score``, 1 from ``min_score + score_ramp`` on."""
         c = self.cfg
-        found = self.matcher.around(matcher, points.xy, points.normals, around, c.window_m, np.radians(c.window_deg),
+        found = self.matcher.around(pyramid, points.xy, points.normals, around, c.window_m, np.radians(c.window_deg),
                                     c.min_score)
         if found.pose is None:
             return None
-        local, pose = self.matcher.fit(matcher.grid, points.xy, points.normals, found.pose)
+        local, pose = self.matcher.fit(pyramid.grid, points.xy, points.normals, found.pose)
         return local, pose, smooth_step((local.score - c.min_score) / c.score_ramp)
 
     def _degenerate(self, grid: LikelihoodGrid, points: ScanPoints, pose: np.ndarray, covariance: np.ndarray) -> bool:
