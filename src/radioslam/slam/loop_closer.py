@@ -220,7 +220,8 @@ class LoopCloser:
         free = fused_free(keys, estimates, self.keyframes.points)
         near = np.max(np.abs(xy - centre), axis=1) <= radius
         if not near.all():
-            near[len(xy) - len(self.keyframes.points[keys[-1]]):] = True  # the latest scan's own points: a map
+            # the latest scan's own points: never an empty map
+            near[len(xy) - len(self.keyframes.points[keys[-1]]):] = True
             xy, normals = xy[near], normals[near]
             free = free[np.max(np.abs(free - centre), axis=1) <= radius]
         grid = LikelihoodGrid.from_points(xy, g.resolution_m, g.sigma_m, self.cfg.relocalize_margin_m, normals,

@@ -63,13 +63,13 @@ class ScanMatcher:
         """Branch and bound's max-pooled pyramid of ``grid`` (kept by a caller that matches against it often)."""
         return BranchAndBound(grid, self.options.levels)
 
-    def search(self, grid: LikelihoodGrid | BranchAndBound, xy: np.ndarray, normals: np.ndarray, centre: np.ndarray,
+    def search(self, grid: LikelihoodGrid, xy: np.ndarray, normals: np.ndarray, centre: np.ndarray,
                headings: np.ndarray, window_m: float, min_score: float, keep_ratio: float = 1.0,
                discount: Callable[[np.ndarray], np.ndarray] | None = None,
                seeds: np.ndarray | None = None) -> BranchBoundResult:
-        """Branch and bound (:meth:`BranchAndBound.search`) over ``grid`` (or its pyramid, built already)."""
-        pyramid = grid if isinstance(grid, BranchAndBound) else self.pyramid(grid)
-        return pyramid.search(xy, normals, centre, headings, window_m, min_score, keep_ratio, discount, seeds)
+        """Branch and bound (:meth:`BranchAndBound.search`) over ``grid``, its pyramid built for this search."""
+        return self.pyramid(grid).search(xy, normals, centre, headings, window_m, min_score, keep_ratio, discount,
+                                         seeds)
 
     def around(self, pyramid: BranchAndBound, xy: np.ndarray, normals: np.ndarray, pose: np.ndarray,
                window_m: float, window_rad: float, min_score: float) -> BranchBoundResult:
